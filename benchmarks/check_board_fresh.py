@@ -151,7 +151,7 @@ def main() -> None:
             only_cv += cv_any and not res.found
         figs = {k: _rms(cv2, obj, v, shape) for k, v in found.items()}
         same = {k: _rms(cv2, obj, v, shape) for k, v in common.items()}
-        ms = {k: f"{1000 * statistics.median(v):.0f}" if v else "-" for k, v in times.items()}
+        ms = {k: f"{1000 * statistics.median(v):.1f}" if v else "-" for k, v in times.items()}
         rows.append([
             name + (" (held out)" if held else ""), f"{size[0]} x {size[1]}",
             f"{shape[0]} x {shape[1]}" if shape else "-", views,

@@ -6,6 +6,8 @@ sub-grids of a partly hidden larger board. Support: tests/geometry/checkerboard_
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy import ndimage
@@ -360,7 +362,8 @@ def test_a_motion_blurred_board_is_found_on_a_coarser_copy(
 def test_coarser_copies_stop_at_blur_min_side(monkeypatch: pytest.MonkeyPatch) -> None:
     """The copies tried for a board not found: 2 x 2 and 4 x 4 blocks of a 1280 x 720 image
     (factor 2 is its own averaged copy), 2 x 2 of a 640 x 480 one, none of a 320 x 240 one
-    (a copy of 160 px would keep squares of a few pixels)."""
+    (a copy of 160 px would keep squares of a few pixels). The noise is sharp: the search is
+    let through here (see the next tests for when it is not)."""
     import imageform.geometry.checkerboard as cb
 
     seen: list[int] = []
@@ -369,12 +372,64 @@ def test_coarser_copies_stop_at_blur_min_side(monkeypatch: pytest.MonkeyPatch) -
         seen.append(level)
 
     monkeypatch.setattr(cb, "_coarse", record)
+    monkeypatch.setattr(cb, "_smear_possible", lambda gray: True)
     for shape, want in (((720, 1280), [2, 4]), ((480, 640), [2]), ((240, 320), [])):
         seen.clear()
         flat = np.random.default_rng(0).normal(0.5, 0.05, shape)
         assert not find_checkerboard(flat, (8, 6)).found
         assert seen == want, (shape, seen)
     assert cb.BLUR_MIN_SIDE == 320
+
+
+KODAK = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "kodak"
+
+
+@pytest.mark.parametrize("name", ["kodim01.png", "kodim08.png", "kodim19.png"])
+def test_a_sharp_photograph_without_a_board_skips_the_coarser_copies(
+    name: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Kodak photographs (768 x 512, no board; a house's windows, a fence): no lattice of 12
+    corners at full resolution and second differences of 1.44-1.71 times the first, so the
+    coarser copies are not searched (with the board's size or ``"auto"``)."""
+    import imageform.geometry.checkerboard as cb
+
+    path = KODAK / name
+    if not path.is_file():
+        pytest.skip("../shared/data/kodak is not available")
+    img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the coarser copies were searched")
+
+    monkeypatch.setattr(cb, "_coarse", never)
+    assert not find_checkerboard(img, (9, 6)).found
+    assert not find_checkerboard(img, "auto").found
+
+
+@pytest.mark.parametrize("shape", [(480, 640), (720, 1280)])
+def test_a_smeared_board_still_searches_the_coarser_copies(
+    shape: tuple[int, int], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The rendered smeared boards leave no lattice at full resolution; the image is soft
+    (second differences 0.2-0.4 times the first), so the coarser copies are searched and the
+    board found there, also on a sharp image's noise added at 1 % (still soft)."""
+    import imageform.geometry.checkerboard as cb
+
+    img, _ = _smeared(shape, 32.0 if shape[0] == 480 else 64.0, 0.35, 25 if shape[0] == 480 else 61)
+    noisy = np.clip(img + np.random.default_rng(1).normal(0.0, 0.01, img.shape), 0.0, 1.0)
+    levels: list[int] = []
+    coarse = cb._coarse
+
+    def record(gray: object, level: int, *args: object) -> object:
+        levels.append(level)
+        return coarse(gray, level, *args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(cb, "_coarse", record)
+    for image in (img, noisy):
+        levels.clear()
+        assert cb._smear_possible(cb._Gray(*cb.gray_codes(image)[:2]))
+        assert find_checkerboard(image, (8, 6)).found
+        assert max(levels) >= (2 if shape[0] == 480 else 4), levels
 
 
 def test_a_board_smeared_over_most_of_a_square_is_not_returned_off_its_corners(

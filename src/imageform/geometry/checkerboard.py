@@ -146,6 +146,14 @@ COARSE_SIZE = 1000
 #: squares of one colour at each corner into a bar, and the ring test sees no four sectors
 #: until the scale reaches past the smear (benchmarks/results/board-fresh-2026-11-30b.md).
 BLUR_MIN_SIDE = 320
+#: The coarser copies are searched only where the image is soft or shows a part of a board:
+#: the mean absolute second difference of the grey image (every second pixel each way) under
+#: this many times its mean absolute first difference (measured when the rule was set: 1.44-1.71
+#: on Kodak's 24 photographs, 0.76-1.21 on rex-blur's 100 webcam frames of a hand-held board,
+#: 0.20-0.40 on the rendered smeared boards of the tests; white noise 1.73), or a lattice of at
+#: least :data:`AUTO_MIN_CORNERS` corners seen at full resolution: a sharp photograph without
+#: a board skips their search (benchmarks/results/board-fresh-2026-11-30c.md).
+BLUR_SOFT = 1.3
 #: ``partial=True``: a corner of a part of a board refined farther than this fraction of its
 #: nearest neighbour's distance from the saddle found drops its row or column.
 PARTIAL_REACH = 0.25
@@ -311,7 +319,7 @@ class _Gray:
     temporary costs its page faults, which at 640 x 480 cost as much as the arithmetic).
     """
 
-    __slots__ = ("_float", "_links", "_seen", "codes", "scale")
+    __slots__ = ("_float", "_links", "_seen", "codes", "lattice", "scale")
 
     def __init__(self, codes: NDArray[np.number], scale: float) -> None:
         self.codes = codes
@@ -319,6 +327,8 @@ class _Gray:
         self._float: NDArray[np.floating] | None = None
         self._seen: dict[tuple[float, int], Candidates] = {}
         self._links: dict[tuple[float, int], NDArray[np.int64]] = {}
+        #: the most corners of a lattice :func:`_detect` saw and refused on this image
+        self.lattice = 0
 
     def candidates(self, sigma: float, cap: int) -> Candidates:
         """Return the corner candidates at ``sigma``, at most ``cap`` (kept: read again later)."""
@@ -472,6 +482,7 @@ def _detect(
         if auto and best_size > cols * rows:  # a larger grid was seen (and refused)
             return grid, best_reason, best_size
         return grid, "", cols * rows
+    image.lattice = max(image.lattice, best_size)
     return None, best_reason, best_size
 
 
@@ -758,7 +769,7 @@ def find_checkerboard(
     gray = _Gray(codes, scale)
     factor = math.ceil(max(codes.shape[:2]) / COARSE_SIZE) if sigma is None else 1
     whole = _whole(gray, size, sigmas, factor, how, half_window, max_iter, tol)
-    if sigma is None and (not whole.found or _unsettled(whole)):
+    if sigma is None and (_unsettled(whole) or (not whole.found and _smear_possible(gray))):
         blurred = _blurred(gray, size, factor, how, half_window, max_iter, tol)
         if blurred is not None and (not whole.found or _failed(blurred) < _failed(whole)):
             whole = blurred
@@ -845,6 +856,31 @@ def _blurred(
             first = first or found
         level *= 2
     return first
+
+
+def _smear_possible(gray: _Gray) -> bool:
+    """Whether a board :func:`_whole` did not find may be smeared past its scales.
+
+    True where the full-resolution search saw a lattice of at least
+    :data:`AUTO_MIN_CORNERS` corners (a part of a board), or where the image is soft: its mean
+    absolute second difference under :data:`BLUR_SOFT` times its mean absolute first
+    difference, both on every second pixel each way (a sharp photograph's fine detail keeps
+    the two alike; a blur removes the second faster). A sharp image with no part of a board
+    skips the coarser copies' search (a board smeared on a sharp background with no lattice
+    left at full resolution is not sought there).
+    """
+    if gray.lattice >= AUTO_MIN_CORNERS:
+        return True
+    codes = gray.codes[::2, ::2]
+    if codes.ndim != 2 or min(codes.shape) < 3:
+        return False
+    exact = np.int16 if codes.dtype.itemsize == 1 else np.int32  # codes' differences, exactly
+    half = codes.astype(exact if codes.dtype.kind in "ui" else np.float32)
+    d0, d1 = np.diff(half, axis=0), np.diff(half, axis=1)
+    first = np.abs(d0).sum(dtype=np.float64) / d0.size + np.abs(d1).sum(dtype=np.float64) / d1.size
+    e0, e1 = np.diff(d0, axis=0), np.diff(d1, axis=1)
+    second = np.abs(e0).sum(dtype=np.float64) / e0.size + np.abs(e1).sum(dtype=np.float64) / e1.size
+    return bool(second < BLUR_SOFT * first)
 
 
 def _failed(result: CheckerboardResult) -> int:
