@@ -670,31 +670,9 @@ def apply_gain_maps(
     white level: a code ``m`` becomes ``black + min((m - black) * gain, white - black)``.
     ``offset`` is where the mosaic's first pixel sits in the image the maps describe (after
     the ActiveArea crop), ``shape`` that image's (H, W) (default: the mosaic's plus offset).
+    :func:`apply_stage2` with GainMaps alone (one implementation of their arithmetic).
     """
-    h, w = mosaic.shape[:2]
-    dt, dl = offset
-    full = shape if shape is not None else (h + dt, w + dl)
-    out = np.asarray(mosaic, dtype=np.float64).copy()
-    blk = np.broadcast_to(np.asarray(black, np.float64), out.shape)
-    n_planes = 1 if out.ndim == 2 else out.shape[2]
-    for gm in maps:
-        # the first row (column) of the opcode's lattice inside the mosaic
-        r_start = gm.top + max(0, -(-(dt - gm.top) // gm.row_pitch)) * gm.row_pitch
-        c_start = gm.left + max(0, -(-(dl - gm.left) // gm.col_pitch)) * gm.col_pitch
-        rows = np.arange(r_start, min(gm.bottom, full[0], h + dt), gm.row_pitch)
-        cols = np.arange(c_start, min(gm.right, full[1], w + dl), gm.col_pitch)
-        if rows.size == 0 or cols.size == 0:
-            continue
-        for plane in range(gm.plane, min(gm.plane + gm.planes, n_planes)):
-            gains = gain_map_gains(gm, rows, cols, full, plane)
-            ix = np.ix_(rows - dt, cols - dl)
-            if out.ndim == 2:
-                sub, b = out[ix], blk[ix]
-                out[ix] = b + np.minimum((sub - b) * gains, white - b)
-            else:
-                sub, b = out[..., plane][ix], blk[..., plane][ix]
-                out[..., plane][ix] = b + np.minimum((sub - b) * gains, white - b)
-    return np.round(np.clip(out, 0.0, 65535.0)).astype(np.uint16)
+    return apply_stage2(mosaic, black, white, list(maps), offset=offset, shape=shape)
 
 
 def _lattice(
