@@ -85,10 +85,11 @@ class StereoCalibrateOptions(_BoardChecks, ImageIn):
     )
 
 
-def _expand(pattern: str, what: str) -> list[Path]:
+def _expand(pattern: str, what: str) -> tuple[list[Path], bool]:
     """Return the files a name, a folder or a glob pattern names, sorted; none is an error.
 
-    A folder or a pattern's files may be skipped when they cannot be read; a file named not.
+    And whether they were gathered (a folder or a pattern, not a file named): those may be
+    skipped when they cannot be read; a file named not.
     """
     from imageform._files import glob_paths, not_a_regular_file
     from imageform.io import image_files
@@ -98,16 +99,16 @@ def _expand(pattern: str, what: str) -> list[Path]:
         path = Path(p)
         kind = not_a_regular_file(path)
         if kind == "is a folder":
-            return image_files(path)
+            return image_files(path), True
         if kind is not None:
             raise InvalidInputError(f"{what} {path} {kind}")
         if not path.is_file():
             raise InvalidInputError(f"{what} file {path} does not exist")
-        return [path]
+        return [path], False
     hits = sorted(glob_paths(p))
     if not hits:
         raise InvalidInputError(f"no files match {what} pattern {p!r}")
-    return [Path(h) for h in hits]
+    return [Path(h) for h in hits], True
 
 
 def _check_distinct(left: str, right: str, lefts: list[Path], rights: list[Path]) -> None:
@@ -168,12 +169,6 @@ def _detect(
     return size, found
 
 
-def _gathered(pattern: str) -> bool:
-    """Whether ``pattern`` is a folder or a glob pattern (its files are not named one by one)."""
-    p = str(pattern)
-    return os.path.isdir(p) or (not os.path.exists(p) and any(c in p for c in "*?["))
-
-
 def _drop_unreadable(
     run: Run, files: tuple[list[Path], list[Path]], dets: tuple[list[Any], list[Any]]
 ) -> tuple[list[Path], list[Path], list[Any], list[Any]]:
@@ -210,7 +205,7 @@ def stereo_calibrate_cmd(
 
     if str(left) == str(right):
         _check_distinct(left, right, [], [])
-    lefts, rights = _expand(left, "left"), _expand(right, "right")
+    (lefts, gathered_l), (rights, gathered_r) = _expand(left, "left"), _expand(right, "right")
     _check_distinct(left, right, lefts, rights)
     if len(lefts) != len(rights):
         raise InvalidInputError(
@@ -222,10 +217,10 @@ def stereo_calibrate_cmd(
     ahead.start("stereo-calibrate")  # a first run: its kernels compiled on two cores
     if run.progress is not None:
         run.progress("detecting", 0.0)
-    size_l, det_l = _detect(opts, lefts, "auto" if auto else board, _gathered(left))
+    size_l, det_l = _detect(opts, lefts, "auto" if auto else board, gathered_l)
     if run.progress is not None:
         run.progress("detecting", 0.5)
-    size_r, det_r = _detect(opts, rights, "auto" if auto else board, _gathered(right))
+    size_r, det_r = _detect(opts, rights, "auto" if auto else board, gathered_r)
     n_given = len(lefts)
     bad = [(f, d) for f, d in zip(lefts + rights, det_l + det_r, strict=True) if isinstance(d, str)]
     lefts, rights, det_l, det_r = _drop_unreadable(run, (lefts, rights), (det_l, det_r))
