@@ -6,6 +6,8 @@ working for callers who do not know about imageform.
 
 - :class:`InvalidInputError` — an argument has the wrong shape, dtype, range or is not finite.
 - :class:`UnknownOptionError` — an option name is not one of the valid ones (they are listed).
+- :class:`UnreadableFileError` — a file cannot be read as what it was asked to be: empty,
+  truncated, not of its format, or a kind imageform does not read (its ``reason`` says which).
 - :class:`DegenerateConfigurationError` — the input is valid but the geometry cannot determine
   the answer (coplanar points for a 3-D DLT, collinear points for a homography, too few views,
   a singular matrix); the message names the cause.
@@ -22,6 +24,8 @@ command line turns each into one ``imageform: warning: ...`` line.
 
 from __future__ import annotations
 
+import os
+
 __all__ = [
     "ConvergenceError",
     "ConvergenceWarning",
@@ -31,6 +35,7 @@ __all__ = [
     "ImageformWarning",
     "InvalidInputError",
     "UnknownOptionError",
+    "UnreadableFileError",
 ]
 
 
@@ -44,6 +49,33 @@ class InvalidInputError(ImageformError, ValueError):
 
 class UnknownOptionError(InvalidInputError):
     """An option name (space, method, pattern, order ...) is not one of the valid names."""
+
+
+class UnreadableFileError(InvalidInputError):
+    """A file cannot be read as what it was asked to be.
+
+    The file exists but is empty, truncated, not of the format it was read as, or holds a
+    kind of image imageform does not read (an animated GIF, a CMYK TIFF, a JPEG 2000 DICOM
+    without its decoder). The message is ``cannot read PATH: REASON``; ``path`` and
+    ``reason`` keep its two parts, so that a caller reading a folder can skip such a file
+    and say why (``imageform calibrate`` on a folder does).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    reason : str
+        Why it cannot be read, in a few words ("an empty file (0 bytes)").
+    """
+
+    def __init__(self, path: str | os.PathLike[str], reason: str) -> None:
+        self.path = os.fspath(path)
+        self.reason = reason
+        super().__init__(f"cannot read {self.path}: {reason}")
+
+    def __reduce__(self) -> tuple[type[UnreadableFileError], tuple[str, str]]:
+        """Pickle by ``path`` and ``reason`` (the default would pass the message alone)."""
+        return (type(self), (self.path, self.reason))
 
 
 class DegenerateConfigurationError(ImageformError, ValueError):

@@ -267,7 +267,7 @@ def test_failures_reported_cli(
     assert code == 1
     assert "4 done, 0 skipped (already finished), 1 failed" in text
     (line,) = [ln for ln in text.splitlines() if ln.startswith("failed: ")]
-    assert "corrupt.png: InvalidInputError:" in line and "corrupt" in line.split(": ", 2)[2]
+    assert "corrupt.png: UnreadableFileError:" in line and "corrupt" in line.split(": ", 2)[2]
     assert len(list(out.rglob("*.png"))) == 4 and not _leftover_temps(out)
     code = main([*argv, "--scheduler", cluster.scheduler_address, "--json"])
     import json
@@ -275,7 +275,7 @@ def test_failures_reported_cli(
     payload = json.loads(capsys.readouterr().out)
     assert code == 1 and (payload["skipped"], payload["failed"]) == (4, 1)
     (bad,) = [j for j in payload["jobs"] if j["status"] == "failed"]
-    assert bad["input"].endswith("corrupt.png") and bad["error"].startswith("InvalidInputError")
+    assert bad["input"].endswith("corrupt.png") and bad["error"].startswith("UnreadableFileError")
 
 
 def test_bad_scheduler_address(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -90,7 +90,7 @@ def test_run_job_atomic_and_failure(tmp_path: Path) -> None:
     bad = tmp_path / "bad.png"
     bad.write_bytes(b"\x89PNG garbage")
     res = run_job("convert", str(bad), str(tmp_path / "out" / "bad.png"), {"to": "srgb"})
-    assert not res["ok"] and res["error"].startswith("InvalidInputError:")
+    assert not res["ok"] and res["error"].startswith("UnreadableFileError:")
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["deep"]  # no temp left
     assert sorted(p.name for p in (tmp_path / "out" / "deep").iterdir()) == ["x.png"]
     assert read_image(src).dtype == np.uint8  # input untouched and readable

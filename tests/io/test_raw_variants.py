@@ -833,7 +833,10 @@ def test_truncated_dng_is_refused_not_read_black(tmp_path: Path) -> None:
     cut = tmp_path / "cut.dng"
     cut.write_bytes(path.read_bytes()[:start])
     end = path.stat().st_size
-    message = rf"cut\.dng is truncated: its raw image's data ends at byte {end}, the file has"
+    message = (
+        rf"cannot read \S*cut\.dng: the file is truncated \(its raw image's data ends at byte "
+        rf"{end}, the file has"
+    )
     with pytest.raises(InvalidInputError, match=rf"{message} {start} bytes"):
         read_raw(cut)
 
@@ -849,7 +852,7 @@ def test_raw_read_as_zeros_from_under_a_bit_a_photosite_is_refused(
     test_truncated_dng_is_refused_not_read_black(tmp_path)
     monkeypatch.setattr(raw_module, "_raw_data_end", lambda p: 0)  # as for a non-DNG file
     cut = tmp_path / "cut.dng"
-    message = rf"is truncated: {cut.stat().st_size} bytes for 6144 photosites \(under one bit"
+    message = rf"is truncated \({cut.stat().st_size} bytes for 6144 photosites, under one bit"
     with pytest.raises(InvalidInputError, match=message):
         read_raw(cut)
 
@@ -867,6 +870,8 @@ def test_uncompressed_dng_cut_in_transfer_is_refused_as_truncated(tmp_path: Path
     cut = tmp_path / "cut.dng"
     cut.write_bytes(data[: len(data) // 2])
     before = cut.read_bytes()
-    with pytest.raises(InvalidInputError, match=r"cut\.dng is truncated: its raw image.s data"):
+    with pytest.raises(
+        InvalidInputError, match=r"cut\.dng: the file is truncated \(its raw image.s data"
+    ):
         read_raw(cut)
     assert cut.read_bytes() == before  # the input is untouched

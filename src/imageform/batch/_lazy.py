@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from imageform.errors import ImageformError, InvalidInputError
+from imageform.errors import ImageformError, InvalidInputError, UnreadableFileError
 
 if TYPE_CHECKING:
     import dask.array
@@ -320,7 +320,7 @@ def _open_lazy(path: str | Path, chunk: int, opened: list[Any] | None) -> Any:
     except Exception as exc:  # a damaged file: tifffile's, zarr's or numcodecs' own errors
         text = str(exc).strip().splitlines()
         reason = text[0][:120] if text else type(exc).__name__
-        raise InvalidInputError(f"cannot read {p}: {reason}") from exc
+        raise UnreadableFileError(p, reason) from exc
     if isinstance(z, zarr.Group):  # a pyramid: level 0 is the full resolution
         z = z["0"]
     if z.ndim != 3 or z.shape[-1] != 3:

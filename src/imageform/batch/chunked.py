@@ -54,7 +54,7 @@ from imageform.batch._write import (
     _write_tiff,
     _write_zarr,
 )
-from imageform.errors import ImageformError, InvalidInputError
+from imageform.errors import ImageformError, InvalidInputError, UnreadableFileError
 from imageform.workflows.color import DISPLAYABLE_SPACES
 
 __all__ = ["CHUNKED_COMMANDS", "ChunkedResult", "open_lazy", "process_chunked"]
@@ -291,7 +291,7 @@ def process_chunked(
             except ImageformError:
                 raise
             except Exception as exc:  # pragma: no cover - open_lazy read it already
-                raise InvalidInputError(f"cannot read {src_p}: {str(exc)[:120]}") from exc
+                raise UnreadableFileError(src_p, str(exc)[:120]) from exc
         if tile is None:
             tile = meta.tile if meta is not None and meta.tile and chunk % meta.tile == 0 else 256
             tile = min(tile, chunk)

@@ -35,7 +35,7 @@ import numpy as np
 
 from imageform._typing import ArrayLike
 from imageform._validate import check_option, describe
-from imageform.errors import InvalidInputError
+from imageform.errors import InvalidInputError, UnreadableFileError
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -122,13 +122,13 @@ def open_dicom(p: Path, *, pixels: bool) -> Any:
             warnings.simplefilter("ignore")
             return pydicom.dcmread(p, stop_before_pixels=not pixels)
     except pydicom.errors.InvalidDicomError:
-        raise InvalidInputError(
-            f"cannot read {p}: not a DICOM file (no 'DICM' at byte 128 and no DICOM header)"
+        raise UnreadableFileError(
+            p, "not a DICOM file (no 'DICM' at byte 128 and no DICOM header)"
         ) from None
     except MemoryError:
-        raise InvalidInputError(f"cannot read {p}: not enough memory to read it") from None
+        raise UnreadableFileError(p, "not enough memory to read it") from None
     except Exception as exc:  # truncated or corrupt: pydicom's EOFError, ValueError, KeyError...
-        raise InvalidInputError(f"cannot read {p}: corrupt DICOM file ({_one_line(exc)})") from None
+        raise UnreadableFileError(p, f"corrupt DICOM file ({_one_line(exc)})") from None
 
 
 def _value(ds: Any, keyword: str, frame: int = 0) -> Any:
@@ -207,9 +207,7 @@ def header(p: Path, ds: Any, frame: int = 0) -> DicomInfo:
     except InvalidInputError:
         raise
     except (ValueError, TypeError, AttributeError, KeyError, IndexError, OverflowError) as exc:
-        raise InvalidInputError(
-            f"cannot read {p}: corrupt DICOM header ({_one_line(exc)})"
-        ) from None
+        raise UnreadableFileError(p, f"corrupt DICOM header ({_one_line(exc)})") from None
 
 
 def _header(p: Path, ds: Any, frame: int) -> DicomInfo:
@@ -219,16 +217,15 @@ def _header(p: Path, ds: Any, frame: int) -> DicomInfo:
             sop = ds.get("SOPClassUID", None) or meta.get("MediaStorageSOPClassUID", None)
             name = str(getattr(sop, "name", "") or "")
             if len(ds) == 0:  # nothing after the file meta information
-                raise InvalidInputError(f"cannot read {p}: the DICOM file ends in its header")
+                raise UnreadableFileError(p, "the DICOM file ends in its header")
             if "Image" in name:  # an image's class without its image attributes
-                raise InvalidInputError(
-                    f"cannot read {p}: a {name} file without its {keyword} (no image in it, or "
-                    "the file is cut short)"
+                raise UnreadableFileError(
+                    p,
+                    f"a {name} file without its {keyword} (no image in it, or "
+                    "the file is cut short)",
                 )
             what = f" ({name})" if name else ""
-            raise InvalidInputError(
-                f"cannot read {p}: a DICOM file with no image{what}: {keyword} is missing"
-            )
+            raise UnreadableFileError(p, f"a DICOM file with no image{what}: {keyword} is missing")
     photometric = str(ds.PhotometricInterpretation).strip().upper()
     rows, cols = int(ds.Rows), int(ds.Columns)
     allocated = int(ds.BitsAllocated)
@@ -240,13 +237,13 @@ def _header(p: Path, ds: Any, frame: int) -> DicomInfo:
     intercept = _number(ds, "RescaleIntercept", 0.0, frame)
     modality_lut = photometric in _GREY and "ModalityLUTSequence" in ds
     if rows <= 0 or cols <= 0 or frames <= 0 or allocated not in (1, 8, 16, 32, 64):
-        raise InvalidInputError(
-            f"cannot read {p}: a DICOM header of {cols} x {rows} px, {frames} frame(s), "
-            f"{allocated} bits allocated"
+        raise UnreadableFileError(
+            p,
+            f"a DICOM header of {cols} x {rows} px, {frames} frame(s), {allocated} bits allocated",
         )
     if photometric in _GREY:
         if spp != 1:
-            raise InvalidInputError(f"cannot read {p}: {photometric} with {spp} samples/pixel")
+            raise UnreadableFileError(p, f"{photometric} with {spp} samples/pixel")
         channels = 1
         if modality_lut:
             dtype = "uint8" if _lut_bits(ds, "ModalityLUTSequence") <= 8 else "uint16"
@@ -256,18 +253,20 @@ def _header(p: Path, ds: Any, frame: int) -> DicomInfo:
             dtype = "float32" if stored <= 24 else "float64"
     elif photometric in _RGB_LIKE:
         if spp != 3 or allocated not in (8, 16) or signed:
-            raise InvalidInputError(
-                f"cannot read {p}: {photometric} with {spp} samples/pixel of {allocated} bits"
-                f"{' (signed)' if signed else ''}; imageform reads colour of 8 or 16 bits"
+            raise UnreadableFileError(
+                p,
+                f"{photometric} with {spp} samples/pixel of {allocated} bits"
+                f"{' (signed)' if signed else ''}; imageform reads colour of 8 or 16 bits",
             )
         channels, dtype = 3, "uint16" if allocated == 16 else "uint8"
     elif photometric == "PALETTE COLOR":
         channels = 3
         dtype = "uint8" if _lut_bits(ds, "RedPaletteColorLookupTableDescriptor") <= 8 else "uint16"
     else:
-        raise InvalidInputError(
-            f"cannot read {p}: a {photometric} DICOM image; imageform reads MONOCHROME1, "
-            "MONOCHROME2, RGB, YBR_FULL(_422) and PALETTE COLOR"
+        raise UnreadableFileError(
+            p,
+            f"a {photometric} DICOM image; imageform reads MONOCHROME1, "
+            "MONOCHROME2, RGB, YBR_FULL(_422) and PALETTE COLOR",
         )
     meta = getattr(ds, "file_meta", None)
     syntax = meta.get("TransferSyntaxUID", None) if meta is not None else None
@@ -351,12 +350,11 @@ def _plugin_error(p: Path, ds: Any, exc: BaseException) -> InvalidInputError:
     why = " ".join(line.strip() for line in str(exc).splitlines() if line.strip())
     hint = next((h for prefix, h in _PLUGINS if uid.startswith(prefix)), None)
     if hint is not None and ("missing dependencies" in why or "does not support" in why):
-        return InvalidInputError(
-            f"cannot read {p}: its pixel data is {name}, which pydicom decodes here only with "
-            f"a plugin: {hint}"
+        return UnreadableFileError(
+            p, f"its pixel data is {name}, which pydicom decodes here only with a plugin: {hint}"
         )
     why = why[:300] or type(exc).__name__
-    return InvalidInputError(f"cannot read {p}: its {name} pixel data cannot be decoded ({why})")
+    return UnreadableFileError(p, f"its {name} pixel data cannot be decoded ({why})")
 
 
 def decode(
@@ -384,12 +382,12 @@ def decode(
             elif info.modality_lut:
                 arr = np.asarray(apply_modality_lut(arr, ds))
     except MemoryError:
-        raise InvalidInputError(f"cannot read {p}: not enough memory to decode it") from None
+        raise UnreadableFileError(p, "not enough memory to decode it") from None
     except (RuntimeError, NotImplementedError) as exc:  # no plugin for its compression
         raise _plugin_error(p, ds, exc) from None
     except Exception as exc:  # truncated pixel data, a bad LUT, a bad value ...
-        raise InvalidInputError(
-            f"cannot read {p}: its pixel data cannot be decoded ({_one_line(exc)})"
+        raise UnreadableFileError(
+            p, f"its pixel data cannot be decoded ({_one_line(exc)})"
         ) from None
     if info.channels == 3 or info.photometric == "PALETTE COLOR":
         if window is not None:
@@ -566,10 +564,11 @@ def check_frame(p: Path, info: DicomInfo, frame: object) -> int:
 
 def multi_frame(p: Path, info: DicomInfo) -> InvalidInputError:
     """Return the one-line refusal of a multi-frame file by ``read_image`` (a TIFF stack's)."""
-    return InvalidInputError(
-        f"cannot read {p}: a multi-frame DICOM of {info.frames} frames of {info.width} x "
+    return UnreadableFileError(
+        p,
+        f"a multi-frame DICOM of {info.frames} frames of {info.width} x "
         f"{info.height} px; imageform reads one image per file: read a frame with "
-        "imageform.io.read_dicom(path, frame=i)"
+        "imageform.io.read_dicom(path, frame=i)",
     )
 
 
@@ -587,7 +586,7 @@ def read(
     check(info)  # before any pixel data is read
     ds = open_dicom(p, pixels=True)
     if "PixelData" not in ds and "FloatPixelData" not in ds and "DoubleFloatPixelData" not in ds:
-        raise InvalidInputError(f"cannot read {p}: the DICOM file has no pixel data")
+        raise UnreadableFileError(p, "the DICOM file has no pixel data")
     if index:
         info = header(p, ds, index)  # that frame's rescale and window
     return decode(p, ds, info, index, window)

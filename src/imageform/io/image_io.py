@@ -77,7 +77,7 @@ from imageform._validate import (
     format_shape,
     shorten,
 )
-from imageform.errors import InvalidInputError
+from imageform.errors import InvalidInputError, UnreadableFileError
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
@@ -267,7 +267,7 @@ def _suffix_format(path: str | Path) -> str:
 
 def _png_header(path: Path, data: bytes) -> ImageInfo:
     if len(data) < 33 or not data.startswith(_PNG_SIGNATURE) or data[12:16] != b"IHDR":
-        raise InvalidInputError(f"cannot read {path}: not a PNG file")
+        raise UnreadableFileError(path, "not a PNG file")
     width, height, depth, ctype, comp, filt, lace = struct.unpack(">IIBBBBB", data[16:29])
     channels = {0: 1, 2: 3, 3: 3, 4: 2, 6: 4}.get(ctype)
     if (
@@ -278,7 +278,7 @@ def _png_header(path: Path, data: bytes) -> ImageInfo:
         or (comp, filt) != (0, 0)
         or lace not in (0, 1)
     ):  # refused here, before libpng prints its warnings about it onto stderr
-        raise InvalidInputError(f"cannot read {path}: corrupt PNG header")
+        raise UnreadableFileError(path, "corrupt PNG header")
     return ImageInfo(width, height, channels, "uint16" if depth == 16 else "uint8", "png")
 
 
@@ -312,18 +312,16 @@ def _npy_header(
                 shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
             offset = fh.tell()
     except (ValueError, OSError, EOFError) as exc:
-        raise InvalidInputError(f"cannot read {path}: not a .npy file ({_one_line(exc)})") from None
+        raise UnreadableFileError(path, f"not a .npy file ({_one_line(exc)})") from None
     if dtype.hasobject:
-        raise InvalidInputError(f"cannot read {path}: object arrays are not images")
+        raise UnreadableFileError(path, "object arrays are not images")
     if len(shape) not in (2, 3):
-        raise InvalidInputError(
-            f"cannot read {path}: expected an image of shape (H, W) or (H, W, C), got {shape}"
+        raise UnreadableFileError(
+            path, f"expected an image of shape (H, W) or (H, W, C), got {shape}"
         )
     channels = shape[2] if len(shape) == 3 else 1
     if not 1 <= channels <= 4:
-        raise InvalidInputError(
-            f"cannot read {path}: expected 1 to 4 channels, got {channels} (shape {shape})"
-        )
+        raise UnreadableFileError(path, f"expected 1 to 4 channels, got {channels} (shape {shape})")
     info = ImageInfo(shape[1], shape[0], channels, str(dtype), "npy")
     if limit is not None:
         _check_pixels(path, info, limit)
@@ -331,7 +329,7 @@ def _npy_header(
     if limit is not None:  # before reading: the header is not trusted
         check_memory(need, str(path), f"a {format_shape(tuple(shape))} {dtype} array")
     if path.stat().st_size - offset < need:
-        raise InvalidInputError(f"cannot read {path}: the file is truncated")
+        raise UnreadableFileError(path, "the file is truncated")
     return info, shape, dtype
 
 
@@ -363,20 +361,21 @@ def _tiff_stack(axes: str, shape: tuple[int, ...]) -> str:
 
 def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
     if not tif.series:
-        raise InvalidInputError(f"cannot read {path}: the TIFF holds no image")
+        raise UnreadableFileError(path, "the TIFF holds no image")
     series = tif.series[0]
     axes = series.axes
     shape = series.shape
     channels = shape[axes.index("S")] if "S" in axes else 1
     if "Y" not in axes or "X" not in axes or any(a not in "YXS" for a in axes):
         # pages, time points, z-planes or channels of their own (axes QYX, CYX...): a stack
-        raise InvalidInputError(f"cannot read {path}: {_tiff_stack(axes, shape)}")
+        raise UnreadableFileError(path, _tiff_stack(axes, shape))
     if channels > 4:  # refused here, so that image_info says what read_image does
-        raise InvalidInputError(
-            f"cannot read {path}: a TIFF of {channels} samples per pixel (a multispectral "
+        raise UnreadableFileError(
+            path,
+            f"a TIFF of {channels} samples per pixel (a multispectral "
             "image, or extra channels); imageform reads images of 1 to 4 channels (grey or "
             "RGB, with alpha): save the channels you need as their own TIFF (tifffile.imread, "
-            "then imwrite of those channels)"
+            "then imwrite of those channels)",
         )
     width, height = shape[axes.index("X")], shape[axes.index("Y")]
     dtype = "uint8" if series.dtype == np.bool_ else str(series.dtype)  # bilevel: 0/255
@@ -422,7 +421,7 @@ def image_info(path: str | Path) -> ImageInfo:
         except InvalidInputError:
             raise
         except Exception as exc:
-            raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+            raise UnreadableFileError(p, f"{_one_line(exc)}") from None
     if fmt == "heif":
         return _heif_info(_open_heif(p))  # libheif's size: its rotation applied
     if fmt == "dicom":
@@ -441,7 +440,7 @@ def image_info(path: str | Path) -> ImageInfo:
     except InvalidInputError:
         raise
     except (OSError, SyntaxError, ValueError) as exc:  # UnidentifiedImageError is an OSError
-        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+        raise UnreadableFileError(p, f"{_one_line(exc)}") from None
 
 
 def _upright(info: ImageInfo, orientation: int) -> ImageInfo:
@@ -507,9 +506,10 @@ def _refuse_animation(p: Path, im: Any, fmt: str) -> None:
     if not getattr(im, "is_animated", False):
         return
     name = {"gif": "GIF", "webp": "WebP"}.get(fmt, fmt.upper())
-    raise InvalidInputError(
-        f"cannot read {p}: an animated {name} of {int(im.n_frames)} frames; imageform reads "
-        "one image (save the frame you need as PNG)"
+    raise UnreadableFileError(
+        p,
+        f"an animated {name} of {int(im.n_frames)} frames; imageform reads "
+        "one image (save the frame you need as PNG)",
     )
 
 
@@ -529,8 +529,8 @@ def _refuse_short_raw(p: Path, im: Any) -> None:
     need = int(offset) + stride * (int(extents[3]) - int(extents[1]))
     have = p.stat().st_size
     if have < need:
-        raise InvalidInputError(
-            f"cannot read {p}: the file is truncated ({have} bytes, its header promises {need})"
+        raise UnreadableFileError(
+            p, f"the file is truncated ({have} bytes, its header promises {need})"
         )
 
 
@@ -577,7 +577,7 @@ def _existing(path: str | Path) -> Path:
     if not p.is_file():
         raise InvalidInputError(f"input {p} {not_a_regular_file(p) or 'is not a regular file'}")
     if p.stat().st_size == 0:  # before any decoder says "cannot identify" or "not a PNG file"
-        raise InvalidInputError(f"cannot read {p}: an empty file (0 bytes)")
+        raise UnreadableFileError(p, "an empty file (0 bytes)")
     return p
 
 
@@ -629,10 +629,11 @@ def _content_format(p: Path, fmt: str) -> str:
     if found is None or found == fmt:
         return fmt
     if found not in IMAGE_FORMATS.values():
-        raise InvalidInputError(
-            f"cannot read {p}: it holds {'an' if found[0] in 'AEIOU' else 'a'} {found} image, "
+        raise UnreadableFileError(
+            p,
+            f"it holds {'an' if found[0] in 'AEIOU' else 'a'} {found} image, "
             f"not {fmt.upper()}; imageform reads "
-            "PNG, JPEG, TIFF, WebP, BMP, GIF, .npy, HEIF and DICOM (convert it to one of them)"
+            "PNG, JPEG, TIFF, WebP, BMP, GIF, .npy, HEIF and DICOM (convert it to one of them)",
         )
     return found
 
@@ -722,7 +723,7 @@ def _read_png(p: Path, limit: int) -> np.ndarray:
         decode = _png_decode_interlaced if data[28] == 1 else imagecodecs.png_decode
         arr = decode(data)
     except Exception as exc:
-        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+        raise UnreadableFileError(p, f"{_one_line(exc)}") from None
     return _orient(np.asarray(arr), _png_orientation(data))
 
 
@@ -784,11 +785,11 @@ def _read_pillow(p: Path, limit: int, fmt: str = "jpeg") -> np.ndarray:
             elif mode == "YCbCr":
                 arr = np.asarray(im.convert("RGB"))
             else:
-                raise InvalidInputError(f"cannot read {p}: unsupported image mode {mode}")
+                raise UnreadableFileError(p, f"unsupported image mode {mode}")
     except InvalidInputError:
         raise
     except (OSError, SyntaxError, ValueError) as exc:  # UnidentifiedImageError is an OSError
-        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+        raise UnreadableFileError(p, f"{_one_line(exc)}") from None
     return _orient(arr, orientation)
 
 
@@ -816,16 +817,17 @@ def _cmyk_to_rgb(p: Path, im: Any) -> np.ndarray:
     try:
         from PIL import ImageCms
     except ImportError:  # a Pillow built without LittleCMS: the naive path would be wrong
-        raise InvalidInputError(
-            f"cannot read {p}: a CMYK JPEG with an ICC profile needs Pillow's ImageCms "
-            "(LittleCMS), which this Pillow lacks"
+        raise UnreadableFileError(
+            p,
+            "a CMYK JPEG with an ICC profile needs Pillow's ImageCms "
+            "(LittleCMS), which this Pillow lacks",
         ) from None
     try:
         src = ImageCms.ImageCmsProfile(io.BytesIO(profile))
         out = ImageCms.profileToProfile(im, src, _srgb_cms_profile(), outputMode="RGB")
     except (ImageCms.PyCMSError, OSError, ValueError) as exc:
-        raise InvalidInputError(
-            f"cannot read {p}: its CMYK ICC profile cannot be applied ({_one_line(exc)})"
+        raise UnreadableFileError(
+            p, f"its CMYK ICC profile cannot be applied ({_one_line(exc)})"
         ) from None
     return np.asarray(out)
 
@@ -862,9 +864,9 @@ def _read_tiff(p: Path, limit: int) -> tuple[np.ndarray, bool]:
     except InvalidInputError:
         raise
     except MemoryError:
-        raise InvalidInputError(f"cannot read {p}: not enough memory to decode it") from None
+        raise UnreadableFileError(p, "not enough memory to decode it") from None
     except Exception as exc:  # tifffile, zlib, imagecodecs errors: one line naming the file
-        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+        raise UnreadableFileError(p, f"{_one_line(exc)}") from None
     if arr.ndim == 3 and "S" in axes and axes.index("S") < axes.index("Y"):
         arr = np.moveaxis(arr, 0, -1)
     arr = _tiff_samples(p, arr, photometric, bits, colormap)
@@ -887,9 +889,9 @@ def _refuse_tiff_color(p: Path, photometric: int, compression: int) -> None:
     if what is None and photometric == 6 and compression != 7:
         what = "YCbCr (not JPEG-compressed)"
     if what is not None:
-        raise InvalidInputError(
-            f"cannot read {p}: a {what} TIFF; imageform reads RGB, grey and palette TIFFs "
-            "(convert it to RGB first)"
+        raise UnreadableFileError(
+            p,
+            f"a {what} TIFF; imageform reads RGB, grey and palette TIFFs (convert it to RGB first)",
         )
 
 
@@ -907,12 +909,11 @@ def _tiff_samples(
     if photometric == 3 and colormap is not None:
         cmap = np.asarray(colormap)
         if arr.ndim != 2 or cmap.ndim != 2 or cmap.shape[0] != 3:
-            raise InvalidInputError(f"cannot read {p}: a palette TIFF of shape {arr.shape}")
+            raise UnreadableFileError(p, f"a palette TIFF of shape {arr.shape}")
         index = arr.astype(np.intp)
         if index.size and int(index.max()) >= cmap.shape[1]:
-            raise InvalidInputError(
-                f"cannot read {p}: palette index {int(index.max())} beyond its "
-                f"{cmap.shape[1]} colours"
+            raise UnreadableFileError(
+                p, f"palette index {int(index.max())} beyond its {cmap.shape[1]} colours"
             )
         if int(cmap.max(initial=0)) < 256:  # a map of 8-bit values (some writers)
             cmap = cmap.astype(np.uint8)
@@ -925,8 +926,8 @@ def _tiff_samples(
         arr, bits = arr.astype(np.uint8) * np.uint8(255), 8
     if photometric == 0:  # WhiteIsZero
         if arr.dtype.kind != "u":
-            raise InvalidInputError(
-                f"cannot read {p}: WhiteIsZero {arr.dtype} samples (only integers are inverted)"
+            raise UnreadableFileError(
+                p, f"WhiteIsZero {arr.dtype} samples (only integers are inverted)"
             )
         full = 8 * arr.dtype.itemsize
         top = (1 << bits) - 1 if 0 < bits < full else np.iinfo(arr.dtype).max
@@ -939,7 +940,7 @@ def _read_npy(p: Path, limit: int) -> np.ndarray:
     try:
         return np.load(p, allow_pickle=False)
     except (ValueError, OSError, EOFError) as exc:
-        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+        raise UnreadableFileError(p, f"{_one_line(exc)}") from None
 
 
 def _normalise(p: Path, arr: np.ndarray, alpha: str, has_alpha: bool) -> np.ndarray:
@@ -1102,7 +1103,7 @@ def _open_heif(p: Path) -> Any:
     try:
         return pillow_heif.open_heif(p, convert_hdr_to_8bit=False)
     except (OSError, ValueError, RuntimeError) as exc:
-        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+        raise UnreadableFileError(p, f"{_one_line(exc)}") from None
 
 
 def _heif_info(f: Any) -> ImageInfo:
@@ -1119,9 +1120,9 @@ def _read_heif(p: Path, limit: int) -> np.ndarray:
     try:
         arr = np.asarray(f)
     except (OSError, ValueError, RuntimeError) as exc:
-        raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+        raise UnreadableFileError(p, f"{_one_line(exc)}") from None
     if arr.dtype not in (np.uint8, np.uint16):
-        raise InvalidInputError(f"cannot read {p}: unsupported HEIF samples {arr.dtype}")
+        raise UnreadableFileError(p, f"unsupported HEIF samples {arr.dtype}")
     return np.array(arr)  # its own memory, not libheif's buffer
 
 
@@ -1391,7 +1392,7 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     fmt = _suffix_format(path)
     p = Path(path)
     if not p.is_file():
-        raise InvalidInputError(f"cannot read {p}: no such file")
+        raise UnreadableFileError(p, "no such file")
     fmt = _content_format(p, fmt)
     if fmt == "npy":
         return DeclaredColorSpace(None, "none", "")
@@ -1411,7 +1412,7 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
                 tag = tif.pages.first.tags.get(34675)
                 icc_tiff = bytes(tag.value) if tag is not None else b""
         except Exception as exc:
-            raise InvalidInputError(f"cannot read {p}: {_one_line(exc)}") from None
+            raise UnreadableFileError(p, f"{_one_line(exc)}") from None
         return declared_by_profile(icc_tiff) if icc_tiff else DeclaredColorSpace(None, "none", "")
     try:
         with _pillow_open(p) as im:
@@ -1424,7 +1425,7 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
             cs = exif.get_ifd(0x8769).get(0xA001)
             interop = exif.get_ifd(0xA005).get(0x0001)
     except (OSError, ValueError, SyntaxError) as err:  # UnidentifiedImageError is an OSError
-        raise InvalidInputError(f"cannot read {p}: {_one_line(err)}") from None
+        raise UnreadableFileError(p, f"{_one_line(err)}") from None
     if cmyk:  # read_image converts it through its profile to sRGB
         prof = parse_icc(icc)
         return DeclaredColorSpace("srgb", "icc", f"{prof.description} (CMYK, read as sRGB)")

@@ -31,7 +31,7 @@ from imageform import _deprecate
 from imageform._files import atomic_write, check_writable
 from imageform._typing import ArrayLike
 from imageform._validate import describe
-from imageform.errors import InvalidInputError
+from imageform.errors import InvalidInputError, UnreadableFileError
 
 __all__ = [
     "CALIBRATION_ILLUMINANTS",
@@ -633,12 +633,13 @@ def _read_raw(
             own.metadata["libraw"] = type(exc).__name__
             return own, _dng_header(p, opcodes=opcodes)[1]
         if (end := _raw_data_end(p)) > (n_bytes := p.stat().st_size):  # cut off in transfer
-            raise InvalidInputError(
-                f"{p} is truncated: its raw image's data ends at byte {end}, the file has "
-                f"{n_bytes} bytes"
+            raise UnreadableFileError(
+                p,
+                f"the file is truncated (its raw image's data ends at byte {end}, the file "
+                f"has {n_bytes} bytes)",
             ) from None
-        raise InvalidInputError(
-            f"{p} is not a raw file LibRaw can read ({type(exc).__name__})"
+        raise UnreadableFileError(
+            p, f"not a raw file LibRaw can read ({type(exc).__name__})"
         ) from None
     with r:
         desc = r.color_desc.decode("ascii", "replace")
@@ -704,16 +705,18 @@ def _read_raw(
             mosaic, black, white = own.mosaic, own.black_level, own.white_level
             raw_type = "float"
         elif (end := _raw_data_end(p)) > (size := p.stat().st_size):  # LibRaw reads zeros
-            raise InvalidInputError(
-                f"{p} is truncated: its raw image's data ends at byte {end}, the file has "
-                f"{size} bytes"
+            raise UnreadableFileError(
+                p,
+                f"the file is truncated (its raw image's data ends at byte {end}, the file "
+                f"has {size} bytes)",
             )
     photosites = mosaic.shape[0] * mosaic.shape[1]
     if (size := p.stat().st_size) * 8 < photosites and np.count_nonzero(mosaic) < mosaic.size / 100:
         # under one bit a photosite and (nearly) all zero: the data is missing, LibRaw read zeros
-        raise InvalidInputError(
-            f"{p} is truncated: {size} bytes for {photosites} photosites (under one bit "
-            "each), and LibRaw decodes zeros"
+        raise UnreadableFileError(
+            p,
+            f"the file is truncated ({size} bytes for {photosites} photosites, under one bit "
+            "each, and LibRaw decodes zeros)",
         )
     meta: dict[str, Any] = {
         "path": str(p),

@@ -34,7 +34,7 @@ import numpy as np
 
 from imageform._typing import ArrayLike
 from imageform._validate import describe
-from imageform.errors import InvalidInputError
+from imageform.errors import InvalidInputError, UnreadableFileError
 from imageform.io.image_io import IMAGE_FORMATS, _natural_key, image_files
 from imageform.io.interlace import Interlacing
 
@@ -341,7 +341,7 @@ class VideoReader:
         assert self._dicom is not None
         ds = open_dicom(self._dicom, pixels=True)
         if "PixelData" not in ds:
-            raise InvalidInputError(f"cannot read {self._dicom}: the DICOM file has no pixel data")
+            raise UnreadableFileError(self._dicom, "the DICOM file has no pixel data")
         for i in range(int(self.info.frames or 0)):
             info = header(self._dicom, ds, i)
             floats = info.dtype.startswith("float")

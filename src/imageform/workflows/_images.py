@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from imageform import _deprecate
-from imageform.errors import InvalidInputError
+from imageform.errors import InvalidInputError, UnreadableFileError
 from imageform.workflows._spec import Options, Run, option
 
 __all__ = [
@@ -178,27 +178,14 @@ def read(path: Path, opts: Any, *, alpha: str | None = None) -> Any:
     )
 
 
-def unreadable(exc: InvalidInputError, path: Path) -> str | None:
-    """Why ``path`` cannot be read as an image, where ``exc`` (from :func:`read`) says so.
+def unreadable(exc: UnreadableFileError) -> str:
+    """Say in a few words why a file cannot be read, for a note that names the file.
 
-    The image readers refuse a file they cannot decode (empty, truncated, not an image, a
-    kind not read) as ``cannot read PATH: why``; returns ``why``, or None for any other
-    refusal (transparent pixels, the pixel limit: the file was read).
+    ``exc.reason`` without the file's name (a decoder's own message may repeat it) and
+    without the byte count of an empty file.
     """
-    import os
-
-    text = str(exc)
-    if not text.startswith("cannot read "):
-        return None
-    try:
-        if os.stat(path).st_size == 0:
-            return "an empty file"
-    except OSError:
-        pass
-    why = text.removeprefix(f"cannot read {path}: ")
-    if why == text:
-        why = why.split(": ", 1)[-1]
-    return why.replace(f" '{path}'", "").replace(f" {path}", "")
+    why = exc.reason.removesuffix(" (0 bytes)")
+    return why.replace(f" '{exc.path}'", "").replace(f" {exc.path}", "")
 
 
 def not_read(given: int, n_read: int) -> str:

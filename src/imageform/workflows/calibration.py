@@ -9,7 +9,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal, get_args
 
-from imageform.errors import ConvergenceError, DegenerateConfigurationError, InvalidInputError
+from imageform.errors import (
+    ConvergenceError,
+    DegenerateConfigurationError,
+    InvalidInputError,
+    UnreadableFileError,
+)
 from imageform.workflows._images import (
     ImageIn,
     ImageOut,
@@ -475,11 +480,10 @@ def _read_views(run: Run, opts: CalibrateOptions, images: list[Path]) -> Iterato
             run.progress("detecting", i / max(len(images), 1))
         try:
             img = read(f, opts)
-        except InvalidInputError as exc:
-            why = unreadable(exc, f) if f in run.gathered else None
-            if why is None:
+        except UnreadableFileError as exc:
+            if f not in run.gathered:
                 raise
-            run.note(f"warning: {f}: skipped, cannot be read ({why})")
+            run.note(f"warning: {f}: skipped, cannot be read ({unreadable(exc)})")
             continue
         if shape0 is None:
             shape0 = tuple(img.shape[:2])

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal, get_args
 
-from imageform.errors import DegenerateConfigurationError, InvalidInputError
+from imageform.errors import DegenerateConfigurationError, InvalidInputError, UnreadableFileError
 from imageform.workflows._images import ImageIn, not_read, read, unreadable
 from imageform.workflows._spec import (
     Input,
@@ -149,11 +149,10 @@ def _detect(
     for f in files:
         try:
             img = read(f, opts)
-        except InvalidInputError as exc:
-            why = unreadable(exc, f) if skip else None
-            if why is None:
+        except UnreadableFileError as exc:
+            if not skip:
                 raise
-            found.append(why)
+            found.append(unreadable(exc))
             continue
         if size is None:
             size = (int(img.shape[1]), int(img.shape[0]))
