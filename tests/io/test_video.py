@@ -67,6 +67,37 @@ def test_image_sequence_folder_and_glob(tmp_path: Path) -> None:
         assert [g.index for g in reader] == [0, 1]
 
 
+def test_image_sequence_skips_frames_that_cannot_be_read(tmp_path: Path) -> None:
+    """A frame cut short in a copy, or an empty file, among the frames (the first one too):
+    left out with one warning each naming it, the others read with their own numbers and
+    times; a folder none of whose files can be read is refused as the first one is."""
+    from imageform.errors import ImageformWarning, UnreadableFileError
+
+    frames = _frames(n=6)
+    for i, f in enumerate(frames):
+        write_image(tmp_path / f"f{i}.png", f)
+    (tmp_path / "f0.png").write_bytes(b"")  # the first: its header cannot be read
+    whole = (tmp_path / "f3.png").read_bytes()
+    (tmp_path / "f3.png").write_bytes(whole[: len(whole) // 3])  # header whole, data cut
+    with pytest.warns(ImageformWarning) as caught, open_video(tmp_path, fps=10) as reader:
+        got = list(reader)
+    assert [g.index for g in got] == [1, 2, 4, 5]
+    assert got[2].time_s == pytest.approx(0.4)
+    for g in got:
+        np.testing.assert_array_equal(g.image, frames[g.index])
+    assert [f.name for f, _ in reader.skipped] == ["f0.png", "f3.png"]
+    assert reader.skipped[0][1] == "an empty file (0 bytes)"
+    texts = [str(w.message) for w in caught]
+    assert texts[0] == f"{tmp_path / 'f0.png'}: skipped, cannot be read (an empty file (0 bytes))"
+    assert texts[1].startswith(f"{tmp_path / 'f3.png'}: skipped, cannot be read (")
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    for i in range(2):
+        (bad / f"f{i}.png").write_bytes(b"")
+    with pytest.raises(UnreadableFileError, match=r"f0\.png: an empty file"):
+        open_video(bad)
+
+
 def test_image_sequence_of_bmp_frames(tmp_path: Path) -> None:
     # capture cards (endoscopy towers, old microscopes) save BMP frames: read as a sequence
     from PIL import Image

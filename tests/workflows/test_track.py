@@ -108,6 +108,26 @@ def test_frames_without_the_board_are_nan(tmp_path: Path) -> None:
     assert rows[1]["tx"] == "nan" and rows[1]["corners"] == "0"
 
 
+def test_a_frame_that_cannot_be_read_is_skipped(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A frame of a folder cut short in a copy: one warning naming it, the other frames
+    tracked under their own numbers, exit 0."""
+    folder = tmp_path / "frames"
+    video_scenes.write_video(folder, K, 3, SIZE)
+    second = sorted(folder.iterdir())[1]
+    second.write_bytes(second.read_bytes()[:100])
+    camera = write_camera(tmp_path / "camera.toml", Camera(K, image_size=SIZE))
+    out = tmp_path / "poses.csv"
+    args = ["track", str(folder), "--camera", str(camera), "--board", "charuco:7x5"]
+    args += ["--square", "30mm", "--marker", "22mm", "--dictionary", "5x5_100", "-o", str(out)]
+    assert main(args) == 0
+    err = capsys.readouterr().err
+    assert f"imageform: warning: {second}: skipped, cannot be read (" in err
+    rows = _read(out)
+    assert [(r["frame"], r["found"]) for r in rows] == [("0", "1"), ("2", "1")]
+
+
 def test_tracker_follows_corners_then_detects_again() -> None:
     tex, origin = video_scenes.board_texture()
     board = CharucoBoard((7, 5), 30.0, 22.0, "5x5_100")

@@ -223,6 +223,11 @@ class VideoReader:
         starts).
     field_order : str or None
         The field order applied (None when ``deinterlaced`` is ``"off"``).
+    skipped : list of (Path, str)
+        The files of an image sequence left out as they were read, each with the reason: a
+        file that cannot be read (:class:`~imageform.errors.UnreadableFileError`: empty, cut
+        short, not an image) is skipped with an :class:`~imageform.errors.ImageformWarning`
+        and the frames after it keep their numbers and times.
     """
 
     def __init__(
@@ -257,8 +262,9 @@ class VideoReader:
         self._container: Any = None
         self._files = _sequence_files(self._source)
         self._iterated = False
+        self.skipped: list[tuple[Path, str]] = []
         if self._files is not None:
-            first = image_info(self._files[0])
+            first = self._first_info(self._files, image_info)
             self._check_size(first.width, first.height)
             self.info = VideoInfo(
                 first.width, first.height, float(fps or 30.0), len(self._files), "sequence",
@@ -438,13 +444,44 @@ class VideoReader:
         assert self._files is not None
         shape = (self.info.height, self.info.width)
         for i, f in enumerate(self._files):
-            img = _rgb8(read_image(f, alpha="drop", max_pixels=self._limit), str(f))
+            try:
+                img = _rgb8(read_image(f, alpha="drop", max_pixels=self._limit), str(f))
+            except UnreadableFileError as exc:  # a frame cut short in a copy: go on without it
+                self._skip(f, exc)
+                continue
             if img.shape[:2] != shape:
                 raise InvalidInputError(
                     f"{f}: {img.shape[1]}x{img.shape[0]} pixels where the sequence's first "
                     f"image has {shape[1]}x{shape[0]}"
                 )
             yield Frame(i, i / self.info.fps, img, f)
+
+    def _skip(self, f: Path, exc: UnreadableFileError) -> None:
+        """Leave out a frame of a sequence that cannot be read, with a warning naming it."""
+        import warnings
+
+        from imageform.errors import ImageformWarning
+
+        self.skipped.append((f, exc.reason))
+        warnings.warn(
+            f"{f}: skipped, cannot be read ({exc.reason})", ImageformWarning, stacklevel=2
+        )
+
+    @staticmethod
+    def _first_info(files: list[Path], image_info: Any) -> Any:
+        """Return the header of the sequence's first file that can be read.
+
+        Files before it are skipped with a warning when the frames are read; raises the
+        first file's UnreadableFileError when no file's header can be read.
+        """
+        first_error: UnreadableFileError | None = None
+        for f in files:
+            try:
+                return image_info(f)
+            except UnreadableFileError as exc:
+                first_error = first_error or exc
+        assert first_error is not None
+        raise first_error
 
     def _decode(self) -> Iterator[Frame]:
         av = _av()
@@ -531,7 +568,9 @@ def open_video(
     Raises
     ------
     InvalidInputError
-        A missing file, folder or device; not a video; no video stream; an empty folder.
+        A missing file, folder or device; not a video; no video stream; an empty folder; a
+        folder none of whose images can be read (one that cannot be read among others is
+        skipped with a warning: :attr:`VideoReader.skipped`).
     imageform.errors.ImageformError
         PyAV is not installed for a file or a device (``pip install "imageform[video]"``).
 
