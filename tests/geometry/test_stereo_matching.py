@@ -436,7 +436,7 @@ def test_bad_input_is_refused_in_one_line(small) -> None:  # type: ignore[no-unt
         stereo_disparity(L, R, vertical="yes")  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="median_filter"):
         stereo_disparity(L, R, median_filter="yes")  # type: ignore[arg-type]
-    with pytest.raises(InvalidInputError, match="sub-pixel fit") as info:
+    with pytest.raises(InvalidInputError, match="subpixel") as info:
         stereo_disparity(L, R, subpixel="cubic")  # type: ignore[arg-type]
     assert "\n" not in str(info.value)
     for d, Q, needle in (

@@ -254,7 +254,7 @@ def stereo_disparity(
     sr = as_real(speckle_range, "speckle_range", minimum=0.0)
     if not isinstance(vertical, bool | np.bool_):
         raise TypeError(f"expected vertical as a bool, got {describe(vertical)}")
-    equiangular = check_option(subpixel, SUBPIXEL_FITS, "sub-pixel fit") == "equiangular"
+    equiangular = check_option(subpixel, SUBPIXEL_FITS, "subpixel") == "equiangular"
     if not isinstance(median_filter, bool | np.bool_):
         raise TypeError(f"expected median_filter as a bool, got {describe(median_filter)}")
     check_memory(3.0 * h * w * n_d, "num_disparities", f"the costs of {h} x {w} px x {n_d}")
