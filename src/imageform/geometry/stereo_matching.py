@@ -111,12 +111,13 @@ def stereo_disparity(
     3. **Winner-take-all** ``d = argmin S(p, ·)``, refined by the vertex of the
        equiangular V through ``S`` at ``d - 1, d, d + 1`` (two lines of opposite slopes;
        M. Shimizu & M. Okutomi 2001's fit for absolute-difference costs, which census
-       bits count), ``d + (S_- - S_+) / (2 (max(S_-, S_+) - S))``, or with ``subpixel=
-       "parabola"`` of the parabola through them (OpenCV's), ``d + (S_- - S_+) / (2 (S_- +
-       S_+ - 2 S))``. Both pull ``d`` toward whole pixels (SGM's sums are flatter at the
-       winner than either model), the V less: on ``benchmarks/check_stereo_depth.py``'s
-       rendered pair the mean error of true disparities a quarter pixel past a whole one is
-       -0.09 px with the V, -0.15 px with the parabola.
+       bits count), ``d + (S_- - S_+) / (2 (max(S_-, S_+) - S))``; with
+       ``subpixel="parabola"``, of the parabola through them (OpenCV's),
+       ``d + (S_- - S_+) / (2 (S_- + S_+ - 2 S))``. Both pull ``d`` toward whole pixels
+       (SGM's sums are flatter at the winner than either model), the V less: on
+       ``benchmarks/check_stereo_depth.py``'s rendered pair the mean error of true
+       disparities a quarter pixel past a whole one is -0.09 px with the V, -0.15 px with
+       the parabola.
     4. **Checks**, each making the pixel invalid (NaN): some disparity of the range takes
        ``x - d`` out of the right image (OpenCV's rule: the first ``min_disparity +
        num_disparities - 1`` columns, and the last ``-min_disparity`` ones, are invalid);
