@@ -44,9 +44,10 @@ def small():  # type: ignore[no-untyped-def]
 @pytest.mark.parametrize(
     "args",
     [
-        (0, 16, 5, 3, 96, False, 0.1, 1.0, 0, 1.0),
-        (-3, 21, 3, 2, 40, True, 0.05, 0.0, 20, 1.0),
-        (2, 13, 7, 6, 200, True, 0.0, -1.0, 5, 2.0),
+        (0, 16, 5, 3, 96, False, 0.1, 1.0, 0, 1.0, True),
+        (0, 16, 5, 3, 96, False, 0.1, 1.0, 0, 1.0, False),
+        (-3, 21, 3, 2, 40, True, 0.05, 0.0, 20, 1.0, True),
+        (2, 13, 7, 6, 200, True, 0.0, -1.0, 5, 2.0, False),
     ],
 )
 def test_kernels_and_twins_give_the_same_numbers(small, args) -> None:  # type: ignore[no-untyped-def]
@@ -63,8 +64,12 @@ def test_kernels_and_twins_give_the_same_numbers(small, args) -> None:  # type: 
     totals = [m.aggregate(costs[0], gl, args[3], args[4], args[5]) for m in (sgm, twin)]
     np.testing.assert_array_equal(*totals)
     # the fused kernel (rows selected as the second pass completes them) is select(aggregate)
-    fused = sgm.match(costs[0], gl, args[3], args[4], args[5], args[0], args[6], args[7])
-    np.testing.assert_array_equal(fused, sgm.select(totals[0], args[0], args[6], args[7]))
+    fused = sgm.match(
+        costs[0], gl, args[3], args[4], args[5], args[0], args[6], args[7], None, args[10]
+    )
+    selected = [m.select(totals[0], args[0], args[6], args[7], args[10]) for m in (sgm, twin)]
+    np.testing.assert_array_equal(fused, selected[0])
+    np.testing.assert_array_equal(*selected)
     a = _match(sgm, gl, gr, *args[:2], args[2], *args[3:])
     b = _match(twin, gl, gr, *args[:2], args[2], *args[3:])
     np.testing.assert_array_equal(a, b)  # NaN where NaN, the same floats elsewhere
@@ -75,11 +80,15 @@ def test_the_public_call_without_numba_is_the_twin(
     small,  # type: ignore[no-untyped-def]
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    kw = {"num_disparities": 16, "speckle_size": 10, "adaptive_p2": True}
-    a = stereo_disparity(small.left, small.right, **kw)
+    kws = [
+        {"num_disparities": 16, "speckle_size": 10, "adaptive_p2": True},
+        {"num_disparities": 16, "median_filter": True, "subpixel": "parabola"},
+    ]
+    a = [stereo_disparity(small.left, small.right, **kw) for kw in kws]
     monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
-    b = stereo_disparity(small.left, small.right, **kw)
-    np.testing.assert_array_equal(a, b)
+    b = [stereo_disparity(small.left, small.right, **kw) for kw in kws]
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(x, y)
 
 
 def test_left_right_check_is_opencvs() -> None:
@@ -108,6 +117,58 @@ def test_left_right_check_is_opencvs() -> None:
         d = m.select(volume(rows | {3: [11, 10, 30], 5: [50, 50, 0]}), 0, 0.1, 1.0)
         np.testing.assert_allclose(d[0, 2:], [np.nan, 1 - 19 / 42, 2, 2], rtol=1e-6)
         assert np.isnan(d[0, :2]).all()  # the band where d = 2 leaves the right image
+        # the equiangular V through 11, 10, 30: 1 - 19 / 40 (the same claims, the same check)
+        d = m.select(volume(rows | {3: [11, 10, 30], 5: [50, 50, 0]}), 0, 0.1, 1.0, True)
+        np.testing.assert_allclose(d[0, 2:], [np.nan, 1 - 19 / 40, 2, 2], rtol=1e-6)
+
+
+@pytest.mark.parametrize("x0", [-0.4, -0.25, -0.1, 0.0, 0.15, 0.3, 0.45])
+def test_equiangular_fit_is_exact_on_a_v_and_the_parabola_is_not(x0) -> None:  # type: ignore[no-untyped-def]
+    """Sums that grow linearly away from a sub-pixel ``x0`` (Shimizu & Okutomi's V): the
+    equiangular fit puts ``d`` on it, the parabola nearer the whole pixel (unless x0 = 0)."""
+    n = 9
+    k = np.arange(n)
+    true = 4 + x0
+    total = np.round(1000 + 400 * np.abs(k - true)).astype(np.uint16)[None, None, :]
+    total = np.repeat(total, n, axis=1)  # the last column is the one whose range fits
+    for m in (sgm, twin):
+        v = m.select(total, 0, 0.0, -1.0, True)[0, -1]
+        par = m.select(total, 0, 0.0, -1.0, False)[0, -1]
+        assert abs(v - true) < 2e-3
+        if x0 != 0.0:
+            assert abs(par - 4) < abs(true - 4) - 0.02  # pulled toward the whole pixel
+
+
+def test_subpixel_option_of_the_public_call(scene) -> None:  # type: ignore[no-untyped-def]
+    kw = {"num_disparities": 48}
+    v = stereo_disparity(scene.left, scene.right, **kw)
+    np.testing.assert_array_equal(
+        v, stereo_disparity(scene.left, scene.right, subpixel="equiangular", **kw)
+    )
+    par = stereo_disparity(scene.left, scene.right, subpixel="parabola", **kw)
+    both = np.isfinite(v) & np.isfinite(par) & scene.visible
+    np.testing.assert_array_equal(np.round(v[both] - par[both]), 0)  # the same winners
+    e_v = np.abs(v - scene.disparity)[both]
+    e_p = np.abs(par - scene.disparity)[both]
+    inl = (e_v < 1) & (e_p < 1)
+    # measured on this pair: RMS of the errors within 1 px 0.187 px (V), 0.197 px (parabola)
+    assert np.sqrt(np.mean(e_v[inl] ** 2)) < np.sqrt(np.mean(e_p[inl] ** 2))
+
+
+def test_median_filter_is_opencvs_median_blur() -> None:
+    """OpenCV's 3 x 3 ``medianBlur`` of its 16-bit map (StereoSGBM::compute), invalid below."""
+    cv2 = pytest.importorskip("cv2")
+    rng = np.random.default_rng(7)
+    d16 = rng.integers(0, 40 * 16, (37, 53)).astype(np.int16)  # disparities 0 to 40 in 16ths
+    d16[rng.uniform(size=d16.shape) < 0.3] = -16  # invalid: (min_d - 1) * 16 with min_d 0
+    d16[:8, :8] = -16  # a block of invalid pixels, at the border
+    ref = cv2.medianBlur(d16, 3)
+    disp = np.where(d16 < 0, np.nan, d16 / 16.0).astype(np.float32)
+    for m in (sgm, twin):
+        got = m.median3(disp)
+        assert got.dtype == np.float32 and got.shape == disp.shape
+        np.testing.assert_array_equal(np.isnan(got), ref < 0)
+        np.testing.assert_array_equal(got[ref >= 0], ref[ref >= 0] / 16.0)
 
 
 def test_speckle_filter_is_opencvs_filter_speckles() -> None:
@@ -172,7 +233,7 @@ def test_a_constant_shift_gives_that_disparity() -> None:
         d = stereo_disparity(np.roll(right, shift, axis=1), right, num_disparities=16)
         valid = d[:, 15:-2]  # off the census window's replicated border on the right
         assert np.isfinite(valid).all() and np.isnan(d[:, :15]).all()
-        assert np.abs(valid - shift).max() < 0.7  # the parabola's vertex: 4.58 to 5.31 for 5
+        assert np.abs(valid - shift).max() < 0.7  # the sub-pixel vertex: within 0.7 px
         np.testing.assert_array_equal(np.round(valid), shift)
     # a negative range: the left image moved left
     d = stereo_disparity(np.roll(right, -4, axis=1), right, min_disparity=-8, num_disparities=8)
@@ -216,6 +277,17 @@ def test_default_penalties(small) -> None:  # type: ignore[no-untyped-def]
             np.testing.assert_array_equal(got, ref)
 
 
+def test_median_filter_fills_isolated_invalid_pixels(scene) -> None:  # type: ignore[no-untyped-def]
+    d = stereo_disparity(scene.left, scene.right, num_disparities=48)
+    m = stereo_disparity(scene.left, scene.right, num_disparities=48, median_filter=True)
+    np.testing.assert_array_equal(m, twin.median3(d))  # the map's median, nothing else
+    band = np.zeros_like(scene.visible)
+    band[:, 47:] = True
+    seen = scene.visible & band
+    assert np.isfinite(m[seen]).mean() > np.isfinite(d[seen]).mean()  # measured 99.3 -> 99.7 %
+    assert np.isnan(m[:, :47]).all()  # the band stays invalid
+
+
 def test_uniqueness_and_lr_check_remove_pixels(scene) -> None:  # type: ignore[no-untyped-def]
     loose = stereo_disparity(scene.left, scene.right, num_disparities=48, uniqueness=0.0,
                              lr_check=None)  # fmt: skip
@@ -233,7 +305,7 @@ def test_uniqueness_and_lr_check_remove_pixels(scene) -> None:  # type: ignore[n
     [
         {"num_disparities": 48},
         {"min_disparity": -3, "num_disparities": 45, "block_size": 3, "adaptive_p2": True,
-         "speckle_size": 20, "uniqueness": 0.05},
+         "speckle_size": 20, "uniqueness": 0.05, "median_filter": True},
     ],
 )  # fmt: skip
 def test_vertical_pair_gives_the_transposed_disparity(scene, kw) -> None:  # type: ignore[no-untyped-def]
@@ -362,6 +434,11 @@ def test_bad_input_is_refused_in_one_line(small) -> None:  # type: ignore[no-unt
         stereo_disparity(L, R, adaptive_p2="yes")  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="vertical"):
         stereo_disparity(L, R, vertical="yes")  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="median_filter"):
+        stereo_disparity(L, R, median_filter="yes")  # type: ignore[arg-type]
+    with pytest.raises(InvalidInputError, match="subpixel") as info:
+        stereo_disparity(L, R, subpixel="cubic")  # type: ignore[arg-type]
+    assert "\n" not in str(info.value)
     for d, Q, needle in (
         (np.ones((2, 2)), np.eye(3), "(4, 4)"),
         (np.ones(4), np.eye(4), "(H, W)"),

@@ -17,7 +17,8 @@ PAMI 30(2), 2008. The steps, each a kernel here with its NumPy twin in
   ``P2`` may be divided by the intensity step along the path (his eq. 12 with
   ``P2 = P2' / |I_p - I_{p-r}|``, never below ``P1``).
 * :func:`select`: winner-take-all where every disparity stays inside the right image,
-  the uniqueness test, the parabola through the best cost and its two neighbours (sub-pixel),
+  the uniqueness test, the sub-pixel vertex of the parabola, or of the equiangular V (two lines
+  of opposite slopes), through the best cost and its two neighbours,
   the right pixels claimed by the unique winners, and OpenCV's left-right check on them.
 * :func:`match`: :func:`select` of :func:`aggregate`, each row selected as soon as the
   second pass completes it (what :func:`~imageform.geometry.stereo_disparity` runs).
@@ -26,6 +27,9 @@ Speed (``benchmarks/check_stereo_depth.py``): the paths are ``int16`` vectors pa
 ends of the disparities (no branch in the inner loops, 16-bit vector lanes), the sums of the
 first pass are the only volume written besides the costs, and the second pass never writes
 its sums back.
+* :func:`median3`: the 3 x 3 median of the disparities that OpenCV's ``StereoSGBM::compute``
+  applies to every map (``medianBlur(disp, disp, 3)``), invalid pixels counted below every
+  valid one, the border replicated.
 * :func:`speckles`: OpenCV's ``filterSpeckles`` (4-connected regions of disparities within
   ``max_diff`` of each other, at most ``max_size`` pixels, made invalid).
 """
@@ -36,7 +40,16 @@ import numpy as np
 
 from imageform._kernels.jit import njit
 
-__all__ = ["aggregate", "census", "cost_volume", "match", "popcount64", "select", "speckles"]
+__all__ = [
+    "aggregate",
+    "census",
+    "cost_volume",
+    "match",
+    "median3",
+    "popcount64",
+    "select",
+    "speckles",
+]
 
 
 @njit
@@ -115,7 +128,7 @@ _BIG = 16384
 
 
 @njit
-def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total):  # type: ignore[no-untyped-def]  # pragma: no cover
+def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total, equiangular):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Run the two raster passes of :func:`aggregate`; with ``fused``, :func:`select` too.
 
     Returns the sums ``uint16 (H, W, D)`` (in ``total``) and, with ``fused``, the
@@ -198,7 +211,7 @@ def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total): 
                         m = min(m, v)
                     cur_min[j, x + 1] = m
             if into_row:
-                _select_row(srow, disp[y], min_d, keep, lr_check, claim, claim_cost)
+                _select_row(srow, disp[y], min_d, keep, lr_check, claim, claim_cost, equiangular)
             prev, cur = cur, prev
             prev_min, cur_min = cur_min, prev_min
     return total, disp
@@ -217,12 +230,14 @@ def aggregate(cost, grey, p1, p2, adaptive):  # type: ignore[no-untyped-def]  # 
     with ``_BIG`` at both ends (no test for the neighbours ``d ± 1``).
     """
     total = np.empty(cost.shape, dtype=np.uint16)
-    return _sweeps(cost, grey, p1, p2, adaptive, False, 0, 1.0, -1.0, total)[0]
+    return _sweeps(cost, grey, p1, p2, adaptive, False, 0, 1.0, -1.0, total, False)[0]
 
 
 @njit
-def match(cost, grey, p1, p2, adaptive, min_d, uniqueness, lr_check, total=None):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """``select(aggregate(cost, grey, p1, p2, adaptive), min_d, uniqueness, lr_check)``.
+def match(  # type: ignore[no-untyped-def]  # pragma: no cover
+    cost, grey, p1, p2, adaptive, min_d, uniqueness, lr_check, total=None, equiangular=False
+):
+    """``select(aggregate(cost, grey, p1, p2, adaptive), min_d, uniqueness, lr_check, ...)``.
 
     The same numbers, with each row selected as the second pass completes it. ``total``: an
     array ``uint16`` of the shape of ``cost`` for the sums of the first pass (its content is
@@ -231,11 +246,12 @@ def match(cost, grey, p1, p2, adaptive, min_d, uniqueness, lr_check, total=None)
     if total is None:
         total = np.empty(cost.shape, dtype=np.uint16)
     keep = 1.0 - uniqueness
-    return _sweeps(cost, grey, p1, p2, adaptive, True, min_d, keep, lr_check, total)[1]
+    out = _sweeps(cost, grey, p1, p2, adaptive, True, min_d, keep, lr_check, total, equiangular)
+    return out[1]
 
 
 @njit
-def _select_row(S, out, min_d, keep, lr_check, claim, claim_cost):  # type: ignore[no-untyped-def]  # pragma: no cover
+def _select_row(S, out, min_d, keep, lr_check, claim, claim_cost, equiangular):  # type: ignore[no-untyped-def]  # pragma: no cover
     """:func:`select` on one row: sums ``S`` (W, D) into disparities ``out`` (W,)."""
     w, n = S.shape
     x0 = min(max(min_d + n - 1, 0), w)
@@ -266,7 +282,10 @@ def _select_row(S, out, min_d, keep, lr_check, claim, claim_cost):  # type: igno
         if 0 < b < n - 1:
             a0 = np.int64(row[b - 1])
             a2 = np.int64(row[b + 1])
-            den = max(a0 + a2 - 2 * np.int64(bc), np.int64(1))
+            if equiangular:  # the V of two lines of opposite slopes through the three
+                den = max(max(a0, a2) - np.int64(bc), np.int64(1))
+            else:  # the parabola
+                den = max(a0 + a2 - 2 * np.int64(bc), np.int64(1))
             d += np.float64(a0 - a2) / np.float64(2 * den)
         out[x] = np.float32(d)
     if lr_check >= 0:
@@ -285,7 +304,7 @@ def _select_row(S, out, min_d, keep, lr_check, claim, claim_cost):  # type: igno
 
 
 @njit
-def select(total, min_d, uniqueness, lr_check):  # type: ignore[no-untyped-def]  # pragma: no cover
+def select(total, min_d, uniqueness, lr_check, equiangular=False):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Disparities ``float32 (H, W)`` from the summed costs; NaN where invalid.
 
     OpenCV's ``StereoSGBM`` rules on the sums ``S``, pixel after pixel from the right end of
@@ -295,7 +314,10 @@ def select(total, min_d, uniqueness, lr_check):  # type: ignore[no-untyped-def] 
     than 1 away costs less than ``S_b / (1 - uniqueness)``. A unique winner claims its right
     pixel ``x_r = x - d`` unless a pixel before it (further right) claimed it at a lower or
     equal sum. Sub-pixel: the vertex of the parabola through ``S_b`` and its neighbours
-    (none at the range's ends). With ``lr_check >= 0``, a pixel is made invalid when both
+    ``S_-``, ``S_+``, ``(S_- - S_+) / (2 (S_- + S_+ - 2 S_b))``, or with ``equiangular`` of
+    the V of two lines of opposite slopes through them, ``(S_- - S_+) / (2 (max(S_-, S_+) -
+    S_b))`` (M. Shimizu, M. Okutomi, ICCV 2001), each denominator at least 1 (none at the
+    range's ends). With ``lr_check >= 0``, a pixel is made invalid when both
     ``floor(d)`` and ``ceil(d)`` of its sub-pixel ``d`` land on right pixels claimed by a
     disparity more than ``lr_check`` away from them (a right pixel no one claimed, or one
     outside the image, passes).
@@ -305,7 +327,9 @@ def select(total, min_d, uniqueness, lr_check):  # type: ignore[no-untyped-def] 
     claim = np.empty(w, dtype=np.int64)
     claim_cost = np.empty(w, dtype=np.int64)
     for y in range(h):
-        _select_row(total[y], out[y], min_d, 1.0 - uniqueness, lr_check, claim, claim_cost)
+        _select_row(
+            total[y], out[y], min_d, 1.0 - uniqueness, lr_check, claim, claim_cost, equiangular
+        )
     return out
 
 
@@ -364,3 +388,51 @@ def speckles(disp, max_size, max_diff):  # type: ignore[no-untyped-def]  # pragm
                 removed += count
             n += 1
     return removed
+
+
+@njit
+def median3(disp):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    """Take the 3 x 3 median ``float32 (H, W)`` of ``disp``, NaN (invalid) below every number.
+
+    OpenCV's ``medianBlur(disp, disp, 3)`` of ``StereoSGBM::compute`` on its 16-bit map, whose
+    invalid value ``(min_d - 1) * 16`` lies below every valid one: NaN where the median is
+    invalid. The border replicated (``BORDER_REPLICATE``, as ``medianBlur``). The median of the
+    nine by the 19 exchanges of A. Paeth's network (Graphics Gems, 1990), branch-free.
+    """
+    h, w = disp.shape
+    low = np.float32(-np.inf)
+    pad = np.empty((h + 2, w + 2), dtype=np.float32)
+    for yy in range(h + 2):
+        src = disp[min(max(yy - 1, 0), h - 1)]
+        row = pad[yy]
+        for xx in range(w + 2):
+            a = src[min(max(xx - 1, 0), w - 1)]
+            row[xx] = low if np.isnan(a) else a
+    out = np.empty((h, w), dtype=np.float32)
+    for y in range(h):
+        r0, r1, r2, o = pad[y], pad[y + 1], pad[y + 2], out[y]
+        for x in range(w):
+            p0, p1, p2 = r0[x], r0[x + 1], r0[x + 2]
+            p3, p4, p5 = r1[x], r1[x + 1], r1[x + 2]
+            p6, p7, p8 = r2[x], r2[x + 1], r2[x + 2]
+            p1, p2 = min(p1, p2), max(p1, p2)
+            p4, p5 = min(p4, p5), max(p4, p5)
+            p7, p8 = min(p7, p8), max(p7, p8)
+            p0, p1 = min(p0, p1), max(p0, p1)
+            p3, p4 = min(p3, p4), max(p3, p4)
+            p6, p7 = min(p6, p7), max(p6, p7)
+            p1, p2 = min(p1, p2), max(p1, p2)
+            p4, p5 = min(p4, p5), max(p4, p5)
+            p7, p8 = min(p7, p8), max(p7, p8)
+            p3 = max(p0, p3)
+            p5 = min(p5, p8)
+            p4, p7 = min(p4, p7), max(p4, p7)
+            p6 = max(p3, p6)
+            p4 = max(p1, p4)
+            p2 = min(p2, p5)
+            p4 = min(p4, p7)
+            p4, p2 = min(p4, p2), max(p4, p2)
+            p4 = max(p6, p4)
+            p4 = min(p4, p2)
+            o[x] = np.float32(np.nan) if p4 == low else p4
+    return out

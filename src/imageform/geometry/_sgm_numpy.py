@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["aggregate", "census", "cost_volume", "match", "select", "speckles"]
+__all__ = ["aggregate", "census", "cost_volume", "match", "median3", "select", "speckles"]
 
 #: bits set in each byte value
 _POP8 = np.array([bin(i).count("1") for i in range(256)], dtype=np.uint8)
@@ -118,7 +118,11 @@ def aggregate(
 
 
 def select(
-    total: NDArray[np.uint16], min_d: int, uniqueness: float, lr_check: float
+    total: NDArray[np.uint16],
+    min_d: int,
+    uniqueness: float,
+    lr_check: float,
+    equiangular: bool = False,
 ) -> NDArray[np.float32]:
     """Disparities from the summed costs (the kernel's rules; NaN where invalid)."""
     h, w, n = total.shape
@@ -140,7 +144,8 @@ def select(
     bm = np.clip(b, 1, max(n - 2, 1))
     a0 = np.take_along_axis(S, np.minimum(bm - 1, n - 1)[..., None], axis=2)[..., 0]
     a2 = np.take_along_axis(S, np.minimum(bm + 1, n - 1)[..., None], axis=2)[..., 0]
-    den = np.maximum(a0 + a2 - 2 * bc, 1)
+    # the equiangular V's denominator, or the parabola's
+    den = np.maximum(np.maximum(a0, a2) - bc if equiangular else a0 + a2 - 2 * bc, 1)
     d = np.where(mid, d + (a0 - a2).astype(np.float64) / (2 * den).astype(np.float64), d)
     out[:, x0:x1] = np.where(unique, d.astype(np.float32), np.float32(np.nan))
     if lr_check < 0:
@@ -186,9 +191,20 @@ def match(
     uniqueness: float,
     lr_check: float,
     total: NDArray[np.uint16] | None = None,
+    equiangular: bool = False,
 ) -> NDArray[np.float32]:
     """:func:`select` of :func:`aggregate` (the kernel fuses the two; ``total`` unused)."""
-    return select(aggregate(cost, grey, p1, p2, adaptive), min_d, uniqueness, lr_check)
+    S = aggregate(cost, grey, p1, p2, adaptive)
+    return select(S, min_d, uniqueness, lr_check, equiangular)
+
+
+def median3(disp: NDArray[np.float32]) -> NDArray[np.float32]:
+    """Take the 3 x 3 median of ``disp``, NaN below every number, the border replicated."""
+    h, w = disp.shape
+    a = np.pad(np.where(np.isnan(disp), np.float32(-np.inf), disp), 1, mode="edge")
+    nine = np.stack([a[dy : dy + h, dx : dx + w] for dy in range(3) for dx in range(3)])
+    m = np.sort(nine, axis=0)[4]
+    return np.where(np.isneginf(m), np.float32(np.nan), m).astype(np.float32)
 
 
 def speckles(disp: NDArray[np.float32], max_size: int, max_diff: float) -> int:

@@ -18,14 +18,21 @@ correspondence", ECCV 1994.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy, use_numba
-from imageform._validate import as_int, as_real, as_real_array, check_memory, describe
+from imageform._validate import (
+    as_int,
+    as_real,
+    as_real_array,
+    check_memory,
+    check_option,
+    describe,
+)
 from imageform.errors import InvalidInputError
 from imageform.geometry.stereo import StereoRectification
 
@@ -35,6 +42,8 @@ __all__ = ["disparity_to_depth", "disparity_to_points", "stereo_disparity"]
 MAX_P2 = 8000
 #: block sizes of the census window (its code holds block_size² - 1 <= 48 bits)
 BLOCK_SIZES = (3, 5, 7)
+#: the sub-pixel fits of :func:`stereo_disparity`
+SUBPIXEL_FITS = ("equiangular", "parabola")
 
 
 def _grey(image: Any, name: str) -> NDArray[np.float32]:
@@ -73,6 +82,8 @@ def stereo_disparity(
     speckle_size: int = 0,
     speckle_range: float = 1.0,
     vertical: bool = False,
+    subpixel: Literal["equiangular", "parabola"] = "equiangular",
+    median_filter: bool = False,
 ) -> NDArray[np.float32]:
     r"""Disparity of a rectified stereo pair by semi-global matching on census costs.
 
@@ -97,8 +108,16 @@ def stereo_disparity(
            \min_k L_r(p-r, k) + P_2\bigr) - \min_k L_r(p-r, k)
 
        summed, ``S(p, d) = Σ_r L_r(p, d)``.
-    3. **Winner-take-all** ``d = argmin S(p, ·)``, refined by the vertex of the parabola
-       through ``S`` at ``d - 1, d, d + 1`` (as OpenCV).
+    3. **Winner-take-all** ``d = argmin S(p, ·)``, refined by the vertex of the
+       equiangular V through ``S`` at ``d - 1, d, d + 1`` (two lines of opposite slopes;
+       M. Shimizu & M. Okutomi 2001's fit for absolute-difference costs, which census
+       bits count), ``d + (S_- - S_+) / (2 (max(S_-, S_+) - S))``; with
+       ``subpixel="parabola"``, of the parabola through them (OpenCV's),
+       ``d + (S_- - S_+) / (2 (S_- + S_+ - 2 S))``. Both pull ``d`` toward whole pixels
+       (SGM's sums are flatter at the winner than either model), the V less: on
+       ``benchmarks/check_stereo_depth.py``'s rendered pair the mean error of true
+       disparities a quarter pixel past a whole one is -0.09 px with the V, -0.15 px with
+       the parabola.
     4. **Checks**, each making the pixel invalid (NaN): some disparity of the range takes
        ``x - d`` out of the right image (OpenCV's rule: the first ``min_disparity +
        num_disparities - 1`` columns, and the last ``-min_disparity`` ones, are invalid);
@@ -111,6 +130,15 @@ def stereo_disparity(
        closer surface hides loses its right pixel to it; an unclaimed one passes); with
        ``speckle_size``, the pixel lies in a 4-connected region of at most that many pixels
        whose neighbours differ by at most ``speckle_range`` (OpenCV's ``filterSpeckles``).
+    5. With ``median_filter``, before the speckle filter: every disparity replaced by the
+       median of its 3 x 3 neighbourhood, invalid pixels counted below every valid one (a
+       pixel is invalid where five or more of the nine are), the border replicated: what
+       OpenCV's ``StereoSGBM::compute`` does to every map it returns (``medianBlur(disp,
+       disp, 3)``, which its parameters cannot turn off). It fills isolated invalid pixels
+       and removes isolated outliers: on the Middlebury pairs of
+       ``benchmarks/check_stereo_depth.py`` it is the difference between OpenCV's density
+       and this function's at equal uniqueness (Adirondack 92.6 % valid, 96.8 % with it,
+       OpenCV 95.6 %).
 
     Parameters
     ----------
@@ -158,6 +186,10 @@ def stereo_disparity(
         "columns" trade places in the steps above (the invalid band is the first ``min_disparity
         + num_disparities - 1`` rows), and the result is exactly that of the transposed pair,
         transposed: the census window and the 8 paths are symmetric.
+    subpixel : {"equiangular", "parabola"}
+        The sub-pixel fit of step 3.
+    median_filter : bool
+        Apply OpenCV's 3 x 3 median to the map (step 5).
 
     Returns
     -------
@@ -223,6 +255,9 @@ def stereo_disparity(
     sr = as_real(speckle_range, "speckle_range", minimum=0.0)
     if not isinstance(vertical, bool | np.bool_):
         raise TypeError(f"expected vertical as a bool, got {describe(vertical)}")
+    equiangular = check_option(subpixel, SUBPIXEL_FITS, "subpixel") == "equiangular"
+    if not isinstance(median_filter, bool | np.bool_):
+        raise TypeError(f"expected median_filter as a bool, got {describe(median_filter)}")
     check_memory(3.0 * h * w * n_d, "num_disparities", f"the costs of {h} x {w} px x {n_d}")
     if use_numba(gl):
         from imageform._kernels import sgm as kern
@@ -230,7 +265,10 @@ def stereo_disparity(
         from imageform.geometry import _sgm_numpy as kern  # type: ignore[no-redef]
     if vertical:  # columns as rows: the kernels walk rows
         gl, gr = np.ascontiguousarray(gl.T), np.ascontiguousarray(gr.T)
-    d = _match(kern, gl, gr, min_d, n_d, bs, P1, P2, bool(adaptive_p2), u, lr, sp, sr)
+    d = _match(
+        kern, gl, gr, min_d, n_d, bs, P1, P2, bool(adaptive_p2), u, lr, sp, sr, equiangular,
+        bool(median_filter),
+    )  # fmt: skip
     return np.ascontiguousarray(d.T) if vertical else d
 
 
@@ -248,6 +286,8 @@ def _match(
     lr: float,
     speckle_size: int,
     speckle_range: float,
+    equiangular: bool = True,
+    median: bool = False,
 ) -> NDArray[np.float32]:
     """Run the pipeline on checked grey images with the kernels (or twins) of module ``kern``."""
     r = bs // 2
@@ -258,8 +298,12 @@ def _match(
     h, w = gl.shape
     cost = kern.cost_volume(cl, cr, min_d, n_d, bs * bs - 1, np.empty((h, w, n_d), np.uint8))
     total = np.empty((h, w, n_d), dtype=np.uint16)
-    disp = kern.match(cost, gl, p1, p2, adaptive, min_d, float(uniqueness), float(lr), total)
+    disp = kern.match(
+        cost, gl, p1, p2, adaptive, min_d, float(uniqueness), float(lr), total, equiangular
+    )
     del cost, total
+    if median:
+        disp = kern.median3(disp)
     if speckle_size > 0:
         kern.speckles(disp, speckle_size, float(speckle_range))
     return np.asarray(disp, dtype=np.float32)
