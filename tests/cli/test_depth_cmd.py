@@ -110,6 +110,31 @@ def test_depth_disparity_and_points(
     np.testing.assert_allclose(disp[fin] * z[fin], scene.f * scene.baseline, rtol=1e-3)
 
 
+def test_depth_subpixel_and_median_options(files: tuple[Path, StereoScene], tmp_path: Path) -> None:
+    """--subpixel and --median-filter reach stereo_disparity: the parabola moves the
+    sub-pixel values (by less than a pixel), the median fills holes, an unknown fit exits 2,
+    and the choices are the library's."""
+    from typing import get_args
+
+    from imageform.geometry.stereo_matching import SUBPIXEL_FITS
+    from imageform.workflows.stereo import Subpixel
+
+    assert get_args(Subpixel) == SUBPIXEL_FITS
+    d, _ = files
+    base = ["depth", str(d / "left.png"), str(d / "right.png"), "--camera", str(d / "rig.toml")]
+    base += ["--num-disparities", "48", "--disparity"]
+    maps = {}
+    for extra in ([], ["--subpixel", "parabola"], ["--median-filter"]):
+        out = tmp_path / f"d{len(maps)}.npy"
+        assert main([*base, *extra, "-o", str(out)]) == 0
+        maps[" ".join(extra)] = np.load(out)
+    plain, parabola, median = maps[""], maps["--subpixel parabola"], maps["--median-filter"]
+    both = np.isfinite(plain) & np.isfinite(parabola)
+    assert 0 < np.abs(plain[both] - parabola[both]).max() < 1.0  # the fits differ below 1 px
+    assert np.isfinite(median).sum() >= np.isfinite(plain).sum()  # the median fills holes
+    assert main([*base, "--subpixel", "cubic", "-o", str(tmp_path / "x.npy")]) == 2
+
+
 #: the vertical rig: the right camera 60 mm below the left (or above: y negated), turned 2 deg
 R_VERT = np.asarray(rvec_to_matrix([0.02, 0.01, -0.03]))
 T_VERT = np.array([1.5, -60.0, 2.0])

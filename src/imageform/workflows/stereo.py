@@ -38,6 +38,10 @@ from imageform.workflows.calibration import (
 
 __all__ = ["WORKFLOWS", "DepthOptions", "StereoCalibrateOptions"]
 
+#: The sub-pixel fits of ``--subpixel`` (geometry.stereo_matching.SUBPIXEL_FITS, spelt out
+#: here: ``imageform --help`` imports no NumPy).
+Subpixel = Literal["equiangular", "parabola"]
+
 
 @dataclass(frozen=True, kw_only=True)
 class StereoCalibrateOptions(_BoardChecks, ImageIn):
@@ -414,6 +418,17 @@ class DepthOptions(ImageIn):
         minimum=0.0,
         maximum=100_000.0,
     )
+    subpixel: Subpixel = option(
+        "equiangular",
+        help="Fit of the matching cost around the best disparity for its sub-pixel value: "
+        "equiangular (two lines of opposite slopes) or parabola (OpenCV's).",
+        choices=get_args(Subpixel),
+    )
+    median_filter: bool = option(
+        False,
+        help="Apply the 3 x 3 median OpenCV's StereoSGBM applies to every map: fills "
+        "isolated invalid pixels (denser, a few more 1-3 px errors).",
+    )
 
 
 def _pair_image(path: Path, opts: DepthOptions, size: tuple[int, int] | None, side: str) -> Any:
@@ -522,6 +537,8 @@ def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Pat
         lr_check=opts.lr_check,
         speckle_size=opts.speckle_size,
         speckle_range=opts.speckle_range,
+        subpixel=opts.subpixel,
+        median_filter=opts.median_filter,
         vertical=rect.vertical,
     )
     # left pixels whose source lies outside the left image hold no measurement
