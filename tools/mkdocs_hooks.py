@@ -61,6 +61,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "chart-photos": "benchmarks/check_chart_photos.py",
     "chart-real": "benchmarks/check_chart_real.py",
     "board-fresh": "benchmarks/check_board_fresh.py",
+    "board-third": "benchmarks/check_board_third.py",
     "charuco": "benchmarks/bench_charuco.py",
     "charuco-real": "benchmarks/check_charuco_real.py",
     "charuco-symmetric": "benchmarks/check_charuco_symmetric.py",

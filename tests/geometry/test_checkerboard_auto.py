@@ -231,6 +231,37 @@ def test_a_thin_margin_is_not_another_row(
     assert find_checkerboard(img, "auto").pattern_size == wrong
 
 
+def test_a_row_dropped_wrongly_is_kept_when_the_smaller_grid_is_refused(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The X-corner test of the outer rows dropping a row of the board's own (as on a real
+    9 x 6 board shown on a tablet, greninja09/Camera_Calibration view 17, whose outer
+    column's margin is thin): the smaller grid is refused (the board continues past it), and
+    the lattice as taken is the board, its corners those of the size given. Two rows dropped
+    (blur failing the test on several) are not taken back: no board; and where both grids are
+    refused the smaller grid's reason is the one reported."""
+    import imageform.geometry.checkerboard as cb
+
+    H = homography(20.0, (160, 120), 0.1, 0.0, 9, 6)
+    img = render_board(9, 6, H, (240, 320), blur=0.8)
+    given_ = find_checkerboard(img, (9, 6))
+    assert given_.corners is not None
+    for drop in (1, 2):
+        monkeypatch.setattr(cb, "_x_edged", lambda gray, grid, d=drop: grid[:, :-d])
+        auto = find_checkerboard(img, "auto")
+        if drop == 1:
+            assert auto.pattern_size == (9, 6), auto.reason
+            assert auto.corners is not None
+            np.testing.assert_array_equal(auto.corners, given_.corners)
+        else:
+            assert not auto.found and "continues" in auto.reason, auto.reason
+    monkeypatch.setattr(cb, "_x_edged", lambda gray, grid: grid[:, :-1])
+    monkeypatch.setattr(cb, "_edge_outside", lambda grid, shape, margin: "left")
+    auto = find_checkerboard(img, "auto")
+    assert not auto.found and "continues" in auto.reason, auto.reason
+    assert "9 x 6" not in auto.reason and "6 x 9" not in auto.reason  # the smaller grid's
+
+
 def test_outer_x_share_reads_each_side() -> None:
     """The share of X-corners on each outer side: 1 on a board's own outer rows; a row added
     past the board (the grid shifted one step out) reads 0 on that side; a side whose

@@ -393,84 +393,97 @@ def _detect(
             tried[rect.ravel()] = True
         elif rect.size < cols * rows:
             rect = _regrown(rect, cand, nbr, hops, want)
-        shape = sorted(rect.shape)
-        grid = cand.xy[rect]
-        if auto:  # a row the lattice took past the board's edge (a thin margin) is dropped
-            grid = _x_edged(image.float, grid)
+        variants = [cand.xy[rect]]
+        if auto:  # a row the lattice took past the board's edge (a thin margin) is dropped;
+            # where one row was dropped the lattice as taken is judged too when the trimmed
+            # grid is refused (the row was the board's own, its outer squares' margin too thin
+            # to show it); not where blur failed the test on several rows (a smeared board,
+            # whose lattice may miss a column as well: an 8 x 6 board taken as 7 x 6)
+            edged = _x_edged(image.float, variants[0])
+            dropped = sum(variants[0].shape[:2]) - sum(edged.shape[:2])
+            variants = [edged, variants[0]] if dropped == 1 else [edged]
+        refused = (best_size, best_reason)
+        for k, grid in enumerate(variants):
+            if k:  # the untrimmed lattice, the trimmed grid refused
+                refused = (best_size, best_reason)
             shape = sorted(grid.shape[:2])
-        if grown:
-            cols, rows = shape[1], shape[0]
-        if grown and (shape[0] < AUTO_MIN_SIDE or shape[0] * shape[1] < AUTO_MIN_CORNERS):
-            if rect.size > best_size:
-                best_size = rect.size
-                best_reason = (
-                    f"largest grid found has {rect.shape[1]} x {rect.shape[0]} corners, too "
-                    f"few to tell a {'partial ' if partial else ''}board by (at least "
-                    f"{AUTO_MIN_CORNERS}, {AUTO_MIN_SIDE} a side)"
-                )
-            continue
-        if partial and (shape[0] > want[0] or shape[1] > want[1]):
-            if rect.size > best_size:
-                best_size = rect.size
-                best_reason = (
-                    f"found a grid of {rect.shape[1]} x {rect.shape[0]} corners, larger than "
-                    f"the pattern {want[1]} x {want[0]} in either orientation: wrong "
-                    "pattern_size?"
-                )
-            continue
-        step = _mean_step(grid) if auto else math.inf
-        if step < AUTO_MIN_STEP:
-            if best_size == 0:  # not counted as a larger grid beside a board found
-                best_reason = (
-                    f"a {rect.shape[1]} x {rect.shape[0]} grid of squares of {step:.1f} px, "
-                    f"too small to tell the board's edge by (at least {AUTO_MIN_STEP:g} px)"
-                )
-            continue
-        if not grown and shape != want:
-            if rect.size > best_size:
-                best_size = rect.size
-                if shape[0] >= want[0] and shape[1] >= want[1]:
+            if grown:
+                cols, rows = shape[1], shape[0]
+            if grown and (shape[0] < AUTO_MIN_SIDE or shape[0] * shape[1] < AUTO_MIN_CORNERS):
+                if rect.size > best_size:
+                    best_size = rect.size
                     best_reason = (
-                        f"found a grid of {rect.shape[1]} x {rect.shape[0]} corners, larger "
-                        f"than the pattern {cols} x {rows}: wrong pattern_size?"
+                        f"largest grid found has {rect.shape[1]} x {rect.shape[0]} corners, too "
+                        f"few to tell a {'partial ' if partial else ''}board by (at least "
+                        f"{AUTO_MIN_CORNERS}, {AUTO_MIN_SIDE} a side)"
                     )
-                else:
+                continue
+            if partial and (shape[0] > want[0] or shape[1] > want[1]):
+                if rect.size > best_size:
+                    best_size = rect.size
                     best_reason = (
-                        f"largest grid found has {rect.shape[1]} x {rect.shape[0]} corners, "
-                        f"pattern {cols} x {rows} asked: board not fully visible, corners missed, "
-                        "or pattern_size too large"
+                        f"found a grid of {rect.shape[1]} x {rect.shape[0]} corners, larger than "
+                        f"the pattern {want[1]} x {want[0]} in either orientation: wrong "
+                        "pattern_size?"
                     )
-            continue
-        problem = lattice_problem(grid)
-        if problem is not None and not problem.startswith("the grid's cells"):
-            # a response peak sits up to ~2 px off its corner where squares are small and
-            # foreshortened (a board turned steeply, a wide-angle lens): the bend and spacing
-            # tests are made again on the sub-pixel corners before the grid is dropped
-            sharp = _sharpened(image.float, grid)
-            if lattice_problem(sharp) is None:
-                grid, problem = sharp, None
-        means = None if problem is not None else cell_means(image.float, grid)
-        if means is not None and not cell_parity_ok(means):
-            problem = "the cells of the grid do not alternate dark and bright"
-        if problem is None and not partial:  # a partial board is cut: it continues
-            side = board_continues(image.float, grid, means, saddles=not auto)
-            if side is not None:
-                problem = (
-                    f"the checkerboard continues {side} of the {cols} x {rows} grid (a "
-                    "larger board cut by the image border? check pattern_size)"
-                )
-        if problem is None and auto:
-            side = _edge_outside(grid, image.codes.shape[:2], 3.0 * sigma)
-            if side is not None:
-                problem = (
-                    f"the {cols} x {rows} grid's outer squares reach past the image's "
-                    f"{side} border: the board may continue there (give pattern_size)"
-                )
-        if problem is not None:
-            if rect.size >= best_size:
-                best_size, best_reason = rect.size, f"grid rejected: {problem}"
-            continue
-        boards.append((grid, means))  # type: ignore[arg-type]  # means is set here
+                continue
+            step = _mean_step(grid) if auto else math.inf
+            if step < AUTO_MIN_STEP:
+                if best_size == 0:  # not counted as a larger grid beside a board found
+                    best_reason = (
+                        f"a {rect.shape[1]} x {rect.shape[0]} grid of squares of {step:.1f} px, "
+                        f"too small to tell the board's edge by (at least {AUTO_MIN_STEP:g} px)"
+                    )
+                continue
+            if not grown and shape != want:
+                if rect.size > best_size:
+                    best_size = rect.size
+                    if shape[0] >= want[0] and shape[1] >= want[1]:
+                        best_reason = (
+                            f"found a grid of {rect.shape[1]} x {rect.shape[0]} corners, larger "
+                            f"than the pattern {cols} x {rows}: wrong pattern_size?"
+                        )
+                    else:
+                        best_reason = (
+                            f"largest grid found has {rect.shape[1]} x {rect.shape[0]} corners, "
+                            f"pattern {cols} x {rows} asked: board not fully visible, corners "
+                            "missed, or pattern_size too large"
+                        )
+                continue
+            problem = lattice_problem(grid)
+            if problem is not None and not problem.startswith("the grid's cells"):
+                # a response peak sits up to ~2 px off its corner where squares are small and
+                # foreshortened (a board turned steeply, a wide-angle lens): the bend and spacing
+                # tests are made again on the sub-pixel corners before the grid is dropped
+                sharp = _sharpened(image.float, grid)
+                if lattice_problem(sharp) is None:
+                    grid, problem = sharp, None
+            means = None if problem is not None else cell_means(image.float, grid)
+            if means is not None and not cell_parity_ok(means):
+                problem = "the cells of the grid do not alternate dark and bright"
+            if problem is None and not partial:  # a partial board is cut: it continues
+                side = board_continues(image.float, grid, means, saddles=not auto)
+                if side is not None:
+                    problem = (
+                        f"the checkerboard continues {side} of the {cols} x {rows} grid (a "
+                        "larger board cut by the image border? check pattern_size)"
+                    )
+            if problem is None and auto:
+                side = _edge_outside(grid, image.codes.shape[:2], 3.0 * sigma)
+                if side is not None:
+                    problem = (
+                        f"the {cols} x {rows} grid's outer squares reach past the image's "
+                        f"{side} border: the board may continue there (give pattern_size)"
+                    )
+            if problem is not None:
+                if rect.size >= best_size:
+                    best_size, best_reason = rect.size, f"grid rejected: {problem}"
+                continue
+            boards.append((grid, means))  # type: ignore[arg-type]  # means is set here
+            break
+        else:
+            if len(variants) > 1:  # both refused: the trimmed grid's reason is reported
+                best_size, best_reason = refused
     if boards:
         if partial:  # the most corners, then the largest area
             grid, means = max(boards, key=lambda b: (b[0].shape[0] * b[0].shape[1], _area(b[0])))
@@ -763,19 +776,62 @@ def find_checkerboard(
         )
     how = method if as_bool(refine, "refine") else None
     size = (cols, rows)
+    found, _ = _search(codes, scale, span, size, sigma, how, half_window, max_iter, tol, partial)
+    return found
+
+
+def _search(
+    codes: NDArray[np.number],
+    scale: float,
+    span: float,
+    size: tuple[int, int],
+    sigma: float | None,
+    how: str | None,
+    half_window: int | None,
+    max_iter: int,
+    tol: float,
+    partial: bool,
+    soft: bool = True,
+) -> tuple[CheckerboardResult, bool]:
+    """:func:`find_checkerboard` on checked arguments; and whether a smear search was in vain.
+
+    ``soft=False`` leaves out the soft image's search of the coarser copies (of
+    :func:`_smear_possible`'s two reasons only the lattice seen at full resolution): the tracker's
+    way not to pay for it frame after frame where it finds nothing. The flag says that the
+    coarser copies were searched for a board not found at full resolution and none was found.
+    """
     if span == 0.0:
-        return CheckerboardResult(False, None, "the image is constant (no contrast)", size)
+        return CheckerboardResult(False, None, "the image is constant (no contrast)", size), False
     sigmas: tuple[float, ...] = DEFAULT_SIGMAS if sigma is None else (float(sigma),)
     gray = _Gray(codes, scale)
     factor = math.ceil(max(codes.shape[:2]) / COARSE_SIZE) if sigma is None else 1
     whole = _whole(gray, size, sigmas, factor, how, half_window, max_iter, tol)
-    if sigma is None and (_unsettled(whole) or (not whole.found and _smear_possible(gray))):
+    vain = False
+    smear = _smear_possible if soft else (lambda g: g.lattice >= AUTO_MIN_CORNERS)
+    if sigma is None and (_unsettled(whole) or (not whole.found and smear(gray))):
         blurred = _blurred(gray, size, factor, how, half_window, max_iter, tol)
+        vain = not whole.found and blurred is None
         if blurred is not None and (not whole.found or _failed(blurred) < _failed(whole)):
             whole = blurred
     if not partial or whole.found:
-        return whole
-    return _partial(gray, size, sigmas, how, half_window, max_iter, tol, whole.reason)
+        return whole, vain
+    return _partial(gray, size, sigmas, how, half_window, max_iter, tol, whole.reason), vain
+
+
+def _tracking_search(
+    image: npt.ArrayLike,
+    pattern_size: tuple[int, int],
+    method: Literal["symmetric", "gradient"],
+    soft: bool,
+) -> tuple[CheckerboardResult, bool]:
+    """``find_checkerboard(image, pattern_size, method=method)`` for a tracker's frame.
+
+    ``soft=False``: a frame soft all over does not, alone, get the coarser copies searched
+    (see :func:`_search`, which also gives the second value).
+    """
+    codes, scale, span = gray_codes(image)
+    size = _check_pattern(pattern_size)
+    return _search(codes, scale, span, size, None, method, None, 30, 1e-3, False, soft)
 
 
 def _whole(

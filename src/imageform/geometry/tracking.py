@@ -24,6 +24,11 @@ drawn in board coordinates on the live image.
   ``detect_charuco`` with ``method="gradient"``): the point-symmetry one was no nearer the
   truth on a rendered checkerboard video and cost half as much again a frame
   (benchmarks/results/track-symmetric-2026-11-29j.md);
+- **no search in vain**: a checkerboard not found in a soft frame is sought on coarser
+  copies of it (a board smeared by motion, :func:`~imageform.geometry.find_checkerboard`);
+  after ``_SMEAR_PATIENCE`` frames in a row where that found nothing (a webcam's frames
+  without a board are all soft) it is made only where part of a board is seen at full
+  resolution, and on one frame in ``_SMEAR_RETRY``, until a board is found;
 - **one orientation**: a checkerboard looks the same turned half a turn; its corners are
   ordered as the previous frame's were (the order nearer to them), so the pose never jumps;
 - **smoothing** (off by default): an exponential filter of the pose,
@@ -49,6 +54,13 @@ from imageform.errors import InvalidInputError
 from imageform.geometry.charuco import CharucoBoard
 
 __all__ = ["BoardPose", "BoardTracker"]
+
+#: A checkerboard not found at full resolution in a soft frame (a webcam's frames all are) is
+#: sought on coarser copies of the frame (a board smeared by motion); after this many
+#: frames in a row where that search ran and found nothing, frames without a board seen in
+#: part at full resolution skip it, but for one in every ``_SMEAR_RETRY`` (the search costs
+#: several times the frame's own; benchmarks/results/board-third-2026-11-30d.md).
+_SMEAR_PATIENCE, _SMEAR_RETRY = 15, 10
 
 
 @dataclass(frozen=True)
@@ -190,6 +202,10 @@ class BoardTracker:
         self._last_ids: NDArray[np.int64] | None = None
         self._prev_uv: dict[int, NDArray[np.float64]] = {}
         self._since_detection = 0
+        #: frames in a row whose coarse-copy search for a smeared board found nothing, the
+        #: frames since they reached _SMEAR_PATIENCE, and whether this frame's did
+        self._vain = self._quiet = 0
+        self._frame_vain = False
         #: the checkerboard's sub-pixel refinement (find_checkerboard's ``method``), detected
         #: and tracked frames alike
         self._refinement: Literal["symmetric", "gradient"] = "gradient"
@@ -199,6 +215,7 @@ class BoardTracker:
         self._box = self._last_uv = self._last = self._last_ids = None
         self._prev_uv = {}
         self._since_detection = 0
+        self._vain = self._quiet = 0
 
     # -- detection ------------------------------------------------------------------------
 
@@ -210,11 +227,14 @@ class BoardTracker:
             # the gradient refinement, as the tracked frames': one method in a video
             found = detect_charuco(image, self._charuco, method="gradient")
             return np.asarray(found.corners, np.float64), np.asarray(found.ids, np.int64)
-        from imageform.geometry.checkerboard import find_checkerboard
+        from imageform.geometry.checkerboard import _tracking_search
 
         assert self._pattern is not None
-        # the tracked frames' refinement: one method in a video
-        res = find_checkerboard(image, self._pattern, method=self._refinement)
+        # the tracked frames' refinement: one method in a video; the soft frame's search for a
+        # smeared board left out while it keeps finding nothing (_SMEAR_PATIENCE)
+        soft = self._vain < _SMEAR_PATIENCE or self._quiet % _SMEAR_RETRY == 0
+        res, vain = _tracking_search(image, self._pattern, self._refinement, soft)
+        self._frame_vain |= vain
         if not res.found or res.corners is None:
             return np.zeros((0, 2)), np.zeros(0, np.int64)
         uv = np.asarray(res.corners, np.float64)
@@ -346,6 +366,8 @@ class BoardTracker:
         if a.ndim not in (2, 3) or a.shape[0] < 8 or a.shape[1] < 8:
             raise InvalidInputError(f"expected a frame as an (H, W[, 3]) image, got {describe(a)}")
         h, w = a.shape[:2]
+        self._quiet = self._quiet + 1 if self._vain >= _SMEAR_PATIENCE else 0
+        self._frame_vain = False
         uv = np.zeros((0, 2))
         ids = np.zeros(0, np.int64)
         searched = "none"
@@ -376,25 +398,20 @@ class BoardTracker:
                 uv, ids = self._detect(a)
                 searched = "frame"
             if uv.shape[0] < self.min_corners:
-                self._box = None
-                self._last = None
-                return _missing("none", uv)
+                return self._lost(uv)
             if self._pattern is not None:
                 uv = self._order_like_last(uv)
             X = self._points[ids]
             try:
                 res = solve_pnp(X, uv, self.K, self.distortion)
             except InvalidInputError:
-                self._box = None
-                self._last = None
-                return _missing("none", uv)
+                return self._lost(uv)
             if not bool(res.valid) or not np.isfinite(res.rms):
-                self._box = None
-                self._last = None
-                return _missing("none", uv)
+                return self._lost(uv)
             self._since_detection = 0
         else:
             self._since_detection += 1
+        self._vain = self._quiet = 0
         R = np.asarray(res.R, np.float64)
         t = np.asarray(res.tvec, np.float64)
         if self.smooth < 1.0 and self._last is not None and self._last.found:
@@ -415,6 +432,14 @@ class BoardTracker:
         self._last_ids = ids
         self._last = pose
         return pose
+
+    def _lost(self, uv: NDArray[np.float64]) -> BoardPose:
+        """Forget the board (not found in this frame) and report the frame as missing."""
+        self._box = None
+        self._last = None
+        if self._frame_vain:
+            self._vain += 1
+        return _missing("none", uv)
 
     def _blend(
         self, R: NDArray[np.float64], t: NDArray[np.float64], last: BoardPose
