@@ -117,6 +117,20 @@ def test_calibrate_bad_input(
     assert "unknown --fix 'focal'; valid: fx, fy" in capsys.readouterr().err
 
 
+def test_calibrate_plot_suffix_checked_first(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A --plot matplotlib cannot write is a usage error before any view is read, not a
+    ValueError from matplotlib after the calibration (nothing written)."""
+    one = str(shared_data / "opencv-left" / "left01.jpg")
+    out = tmp_path / "cam.toml"
+    args = ["calibrate", one, "--board", "9x6", "-o", str(out)]
+    assert main([*args, "--plot", str(tmp_path / "errors.txt")]) == 2
+    err = capsys.readouterr().err
+    assert "expected --plot as a .png, .svg or .pdf file, got 'errors.txt'" in err
+    assert "ValueError" not in err and not out.exists()
+
+
 def test_calibrate_literal_bracket_names(
     shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -329,6 +329,9 @@ def _converging(max_iter: int) -> Iterator[None]:
 
 # ---------------------------------------------------------------- calibrate
 
+#: The figure files ``--plot`` writes.
+_PLOT_SUFFIXES = (".png", ".svg", ".pdf")
+
 
 @dataclass(frozen=True, kw_only=True)
 class CalibrateOptions(_BoardChecks, ImageIn):
@@ -411,6 +414,10 @@ class CalibrateOptions(_BoardChecks, ImageIn):
     def check(self) -> None:
         """Check the board; a ChArUco board needs a ``--marker`` smaller than ``--square``."""
         super().check()
+        if self.plot is not None and self.plot.suffix.lower() not in _PLOT_SUFFIXES:
+            raise InvalidInputError(
+                f"expected --plot as a .png, .svg or .pdf file, got {self.plot.name!r}"
+            )
         charuco = parse_charuco(self.board)
         if charuco is not None and self.partial:
             raise InvalidInputError(
