@@ -212,3 +212,23 @@ def test_the_old_bits_flag_stays_hidden_beside_bit_depth(name: str) -> None:
     }
     with pytest.warns(DeprecationWarning, match="use bit_depth="):
         assert wf.options(**required, bits=16).bit_depth == 16
+
+
+#: Numeric options of a measured quantity, and a unit their --help must name.
+UNITS = {
+    ("project", "cx"): "pixels",
+    ("project", "cy"): "pixels",
+    ("project", "skew"): "pixels",
+    ("triangulate", "sigma"): "px",
+    ("calibrate", "half_window"): "pixels",
+    ("stereo-calibrate", "half_window"): "pixels",
+    ("track", "fps"): "frames/s",
+    ("flatfield", "working_size"): "pixels",
+}
+
+
+@pytest.mark.parametrize(("name", "field"), list(UNITS))
+def test_measured_options_say_their_unit(name: str, field: str) -> None:
+    """A newcomer reading --help learns the unit of a number (found missing walking the docs)."""
+    (f,) = [f for f in WORKFLOWS[name].options.fields() if f.name == field]
+    assert UNITS[name, field] in f.metadata["help"]

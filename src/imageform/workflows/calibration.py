@@ -359,7 +359,7 @@ class CalibrateOptions(_BoardChecks, ImageIn):
         output=True,
     )
     half_window: int | None = option(
-        None, help="Sub-pixel window half size (OpenCV's tutorial: 11); default adaptive."
+        None, help="Sub-pixel window half size in pixels (OpenCV's tutorial: 11); default adaptive."
     )
     refinement: Refinement = option("symmetric", help=REFINEMENT_HELP, choices=get_args(Refinement))
     partial: bool = option(

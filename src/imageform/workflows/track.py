@@ -110,7 +110,8 @@ class TrackOptions(Options):
         metavar="ALPHA",
     )
     fps: float | None = option(
-        None, help="Frame rate of an image sequence (default 30), or to ask a device for."
+        None,
+        help="Frame rate (frames/s) of an image sequence (default 30), or to ask a device for.",
     )
     max_frames: int | None = option(
         None, help="Stop after this many frames (a device runs until Ctrl-C otherwise)."
