@@ -232,3 +232,26 @@ def test_measured_options_say_their_unit(name: str, field: str) -> None:
     """A newcomer reading --help learns the unit of a number (found missing walking the docs)."""
     (f,) = [f for f in WORKFLOWS[name].options.fields() if f.name == field]
     assert UNITS[name, field] in f.metadata["help"]
+
+
+def _path_flags(name: str) -> list[str]:
+    cmd = build_command(WORKFLOWS[name])
+    return [
+        p.opts[-1]
+        for p in cmd.params
+        if isinstance(p, click.Option) and isinstance(p.type, click.Path) and not p.hidden
+    ]
+
+
+@pytest.mark.parametrize(
+    ("name", "flag"), [(n, f) for n in WORKFLOWS for f in _path_flags(n)], ids=str
+)
+def test_a_file_option_without_its_value_names_it(
+    name: str, flag: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--corners --plot p.png`` forgot the corners' file: a usage error naming --corners,
+    not a file named --plot and 'input file p.png does not exist' after the work."""
+    assert main([name, flag, "--json"]) == 2
+    err = capsys.readouterr().err
+    assert "a file name is missing: got the option --json instead" in err, err
+    assert f"'{flag}'" in err
