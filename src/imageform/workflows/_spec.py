@@ -29,6 +29,7 @@ __all__ = [
     "Result",
     "Run",
     "Workflow",
+    "check_suffix",
     "choice_names",
     "flag_of",
     "normalize_choice",
@@ -407,6 +408,12 @@ class Run:
         """Add a one-line note for the user (stderr); a note already given is not repeated."""
         if text not in self.notes:
             self.notes.append(text)
+
+
+def check_suffix(path: Path | None, suffix: str, flag: str, what: str) -> None:
+    """Refuse an output ``path`` of ``flag`` that does not end in ``suffix`` (JSON in a .png)."""
+    if path is not None and path.suffix.lower() != suffix:
+        raise InvalidInputError(f"{flag} writes {what}: give a {suffix} name, not {path.name!r}")
 
 
 def refuse_foreign_folder(

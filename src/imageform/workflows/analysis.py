@@ -30,7 +30,7 @@ from imageform.workflows._images import (
     refuse_unscaled_floats,
     write,
 )
-from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
+from imageform.workflows._spec import Input, Output, Result, Run, Workflow, check_suffix, option
 from imageform.workflows.chart import CorrectionMethod
 
 __all__ = [
@@ -370,6 +370,7 @@ def fit_correction(run: Run, opts: FitCorrectionOptions, *, out: Path, charts: A
     in them: ``--chart-layout``), or one CSV; one image alone is fitted to the ColorChecker's
     published sRGB values.
     """
+    check_suffix(out, ".json", "-o", "the correction (JSON)")
     files = [Path(p) for p in charts]
     csvs = [p.suffix.lower() == ".csv" for p in files]
     if not (len(files) == 1 or (len(files) == 2 and not any(csvs))):
@@ -487,6 +488,7 @@ class HarmonizeOptions(ImageIn, ImageOut, RgbFrom):
         super().check()
         if self.correction is not None and self.chart is not None:
             raise InvalidInputError("expected --correction FILE or --chart FILE, got both")
+        check_suffix(self.save_correction, ".json", "--save-correction", "the correction (JSON)")
         for name in ("correction", "chart", "reference"):
             v = getattr(self, name)
             if v is not None:
