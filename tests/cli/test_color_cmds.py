@@ -171,6 +171,24 @@ def test_white_balance_keeps_the_input_s_profile(rgb_png: Path, tmp_path: Path) 
     assert image_color_space(plain).name is None
 
 
+def test_white_balance_manual_and_percentile_usage(
+    rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The docs' manual line without its --cct, or a percentile over 100: usage errors that name
+    the command's flags (not 'illuminant= or cct=', the Python keywords), nothing written."""
+    out = tmp_path / "wb.png"
+    base = ["white-balance", str(rgb_png), "-o", str(out)]
+    for extra, needle in (
+        (["--method", "manual"], "--method manual takes one of --cct KELVIN"),
+        (["--method", "manual", "--cct", "3200", "--illuminant", "A"], "one of --cct"),
+        (["--method", "white-patch", "--percentile", "150"], "expected --percentile <= 100"),
+    ):
+        assert main([*base, *extra]) == 2, extra
+        assert needle in capsys.readouterr().err
+    assert not out.exists()
+    assert main([*base, "--method", "manual", "--cct", "3200"]) == 0
+
+
 def test_info_says_what_a_file_holds(
     rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

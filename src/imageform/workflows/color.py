@@ -299,6 +299,8 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
         help="white-patch: percentile of each channel (0-100; default 99, max-rgb 100); "
         "grayness-index: percent of the pixels taken as grey (default 0.1); pca: percent "
         "of darkest and of brightest pixels (default 3.5).",
+        minimum=0,
+        maximum=100,
     )
     p: float = option(6.0, help="shades-of-gray / gray-edge: Minkowski norm p >= 1.")
     sigma: float = option(1.0, help="gray-edge, grayness-index: Gaussian scale in pixels.")
@@ -333,10 +335,16 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
         super().check()
         if self.chart is not None:
             object.__setattr__(self, "chart", Path(self.chart))
-        if normalize_choice(self.method, _WB_METHODS, "--method") != "chart":
+        method = normalize_choice(self.method, _WB_METHODS, "--method")
+        if method != "chart":
             used = [f for f, v in (("--chart", self.chart), ("--overlay", self.overlay)) if v]
             if used:
                 raise InvalidInputError(f"{', '.join(used)} go(es) with --method chart only")
+        if method == "manual" and (self.illuminant is None) == (self.cct is None):
+            raise InvalidInputError(
+                "--method manual takes one of --cct KELVIN (e.g. 3200) or --illuminant NAME "
+                "(e.g. A, D50, F2)"
+            )
 
     def params(self) -> dict[str, Any]:
         """Keywords of :func:`imageform.color.white_balance`."""
