@@ -178,12 +178,12 @@ def test_white_balance_manual_and_percentile_usage(
     the command's flags (not 'illuminant= or cct=', the Python keywords), nothing written."""
     out = tmp_path / "wb.png"
     base = ["white-balance", str(rgb_png), "-o", str(out)]
-    for extra, needle in (
-        (["--method", "manual"], "--method manual takes one of --cct KELVIN"),
-        (["--method", "manual", "--cct", "3200", "--illuminant", "A"], "one of --cct"),
-        (["--method", "white-patch", "--percentile", "150"], "expected --percentile <= 100"),
+    for extra, needle, code in (
+        (["--method", "manual"], "--method manual takes one of --cct KELVIN", 1),
+        (["--method", "manual", "--cct", "3200", "--illuminant", "A"], "one of --cct", 1),
+        (["--method", "white-patch", "--percentile", "150"], "expected --percentile <= 100", 2),
     ):
-        assert main([*base, *extra]) == 2, extra
+        assert main([*base, *extra]) == code, extra
         assert needle in capsys.readouterr().err
     assert not out.exists()
     assert main([*base, "--method", "manual", "--cct", "3200"]) == 0

@@ -335,16 +335,10 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
         super().check()
         if self.chart is not None:
             object.__setattr__(self, "chart", Path(self.chart))
-        method = normalize_choice(self.method, _WB_METHODS, "--method")
-        if method != "chart":
+        if normalize_choice(self.method, _WB_METHODS, "--method") != "chart":
             used = [f for f, v in (("--chart", self.chart), ("--overlay", self.overlay)) if v]
             if used:
                 raise InvalidInputError(f"{', '.join(used)} go(es) with --method chart only")
-        if method == "manual" and (self.illuminant is None) == (self.cct is None):
-            raise InvalidInputError(
-                "--method manual takes one of --cct KELVIN (e.g. 3200) or --illuminant NAME "
-                "(e.g. A, D50, F2)"
-            )
 
     def params(self) -> dict[str, Any]:
         """Keywords of :func:`imageform.color.white_balance`."""
@@ -363,6 +357,11 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
     import numpy as np
 
     refuse_absent_device(opts)  # before any file is read
+    if opts.method == "manual" and (opts.illuminant is None) == (opts.cct is None):
+        raise InvalidInputError(  # the library's words are its keywords, illuminant= and cct=
+            "--method manual takes one of --cct KELVIN (e.g. 3200) or --illuminant NAME "
+            "(e.g. A, D50, F2)"
+        )
     img = read(image, opts)
     if img.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got {img.shape[-1]} channel(s)")
