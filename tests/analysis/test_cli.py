@@ -72,6 +72,14 @@ def test_segment_refuses_to_overwrite_input(tmp_path: Path, capsys) -> None:  # 
     assert "also an input" in capsys.readouterr().err
     assert main(["segment", str(src), "--h", "a:b", "--out", str(tmp_path / "m.png")]) == 2
     assert "LOW:HIGH" in capsys.readouterr().err  # checked with the options: a usage error
+    # the docs' OpenCV S and V without --opencv-ranges: the flag is named, not the keyword
+    args = ["segment", str(src), "--s", "30:255", "--out", str(tmp_path / "m.png")]
+    assert main(args) == 1
+    err = capsys.readouterr().err
+    assert (
+        "expected --s bounds in [0, 1] (unit range), got (30.0, 255.0); OpenCV's 0 to 255 " in err
+    )
+    assert err.rstrip().endswith("codes with --opencv-ranges") and "opencv_ranges=" not in err
 
 
 def test_segment_empty_mask_is_reported(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]

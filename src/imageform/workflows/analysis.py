@@ -12,6 +12,7 @@ cropped to the chart or be photographs with a ColorChecker anywhere in them
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal, get_args
@@ -135,16 +136,20 @@ def segment(run: Run, opts: SegmentOptions, *, out: Path, image: Path) -> Result
     from imageform.io import write_image
 
     read_as, img, space = _srgb(run, image, opts, clip=True)
-    seg = segment_hsv(
-        img,
-        _range(opts.h, "--h"),
-        _range(opts.s, "--s"),
-        _range(opts.v, "--v"),
-        opencv_ranges=opts.opencv_ranges,
-        open_radius=opts.open_radius,
-        close_radius=opts.close_radius,
-        min_area=opts.min_area,
-    )
+    try:
+        seg = segment_hsv(
+            img,
+            _range(opts.h, "--h"),
+            _range(opts.s, "--s"),
+            _range(opts.v, "--v"),
+            opencv_ranges=opts.opencv_ranges,
+            open_radius=opts.open_radius,
+            close_radius=opts.close_radius,
+            min_area=opts.min_area,
+        )
+    except InvalidInputError as exc:  # the library's keywords as this command's flags
+        text = re.sub(r"\bexpected ([hsv]) ", r"expected --\1 ", str(exc))
+        raise InvalidInputError(text.replace("opencv_ranges=True", "--opencv-ranges")) from None
     write_image(run.file(out), np.where(seg.mask, np.uint8(255), np.uint8(0))[..., None])
     if opts.overlay is not None:
         write(run, opts.overlay, overlay_mask(img, seg.mask), opts, like=read_as)
