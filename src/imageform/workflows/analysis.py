@@ -148,8 +148,8 @@ def segment(run: Run, opts: SegmentOptions, *, out: Path, image: Path) -> Result
             min_area=opts.min_area,
         )
     except InvalidInputError as exc:  # the library's keywords as this command's flags
-        text = re.sub(r"\bexpected ([hsv]) ", r"expected --\1 ", str(exc))
-        raise InvalidInputError(text.replace("opencv_ranges=True", "--opencv-ranges")) from None
+        msg = re.sub(r"\bexpected ([hsv]) ", r"expected --\1 ", str(exc))
+        raise InvalidInputError(msg.replace("opencv_ranges=True", "--opencv-ranges")) from None
     write_image(run.file(out), np.where(seg.mask, np.uint8(255), np.uint8(0))[..., None])
     if opts.overlay is not None:
         write(run, opts.overlay, overlay_mask(img, seg.mask), opts, like=read_as)
