@@ -119,6 +119,8 @@ def test_correction_files_are_json_and_read_as_such(
           str(tmp_path / "s.png")], "--save-correction writes the correction (JSON)", 2),
         (["harmonize", c, "-o", str(tmp_path / "h.png"), "--correction", c],
          "chart.png is not a 'color_correction' file: not text", 1),
+        (["stain-normalize", c, "-o", str(tmp_path / "n.png"), "--target", c, "--save-target",
+          str(tmp_path / "t.png")], "--save-target writes the target's statistics (JSON)", 2),
     ):  # fmt: skip
         assert main(args) == code, args
         err = capsys.readouterr().err

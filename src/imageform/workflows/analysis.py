@@ -208,6 +208,7 @@ class StainNormalizeOptions(ImageIn, ImageOut, RgbFrom):
         """Check the options and take ``target`` as a path."""
         super().check()
         object.__setattr__(self, "target", Path(self.target))
+        check_suffix(self.save_target, ".json", "--save-target", "the target's statistics (JSON)")
         if self.mask is not None:
             key = str(self.mask).strip().lower()
             object.__setattr__(self, "mask", key if key in _MASK_WORDS else str(self.mask))
