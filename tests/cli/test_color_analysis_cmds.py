@@ -109,8 +109,8 @@ def test_correction_files_are_json_and_read_as_such(
     chart = _png(tmp_path / "chart.png", (synthetic_chart_image() * 255).round().astype(np.uint8))
     c = str(chart)
     for args, needle, code in (
-        (["fit-correction", c, "-o", str(tmp_path / "f.png")], "give a .json name", 1),
-        (["chart", c, "-o", str(tmp_path / "c.txt")], "give a .json name", 1),
+        (["fit-correction", c, "-o", str(tmp_path / "f.png")], "give -o a .json name", 1),
+        (["chart", c, "-o", str(tmp_path / "c.txt")], "give -o a .json name", 1),
         (["chart", c, "-o", str(tmp_path / "c.json"), "--csv", str(tmp_path / "p.json")],
          "--csv writes the patch table (CSV): give a .csv name, not 'p.json'", 2),
         (["chart", c, "-o", str(tmp_path / "c.json"), "--correction", str(tmp_path / "k.png")],

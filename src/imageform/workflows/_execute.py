@@ -14,6 +14,7 @@ from typing import Any
 from imageform._files import Outputs, not_a_regular_file
 from imageform.errors import InvalidInputError
 from imageform.workflows._spec import (
+    IMAGE_SUFFIXES,
     Options,
     Result,
     Run,
@@ -67,6 +68,22 @@ def _note_of(w: warnings.WarningMessage) -> str:
     return "warning: " + (text[0] if text else w.category.__name__)
 
 
+def _check_data_suffix(wf: Workflow, out: Path) -> None:
+    """Refuse a main output of a data file (camera file, table, JSON) under another kind's name.
+
+    ``calibrate -o cam.json`` or ``emva -o e.png`` would write TOML or JSON there. Only for
+    workflows that write no image (their ``suffixes`` share none with the images'), before
+    anything is read.
+    """
+    if not wf.suffixes or set(wf.suffixes) & set(IMAGE_SUFFIXES):
+        return
+    if out.suffix.lower() not in wf.suffixes:
+        kinds = " or ".join(wf.suffixes)
+        raise InvalidInputError(
+            f"{wf.name} writes a {kinds} file: give -o a {kinds} name, not {out.name!r}"
+        )
+
+
 def execute(
     workflow: Workflow | str,
     *,
@@ -117,6 +134,7 @@ def execute(
     wf = get_workflow(workflow) if isinstance(workflow, str) else workflow
     if out is not None:
         out = as_path(out, "out (-o/--out)")
+        _check_data_suffix(wf, Path(out))
     force = as_bool(force, "force")
     if progress is not None and not callable(progress):
         raise InvalidInputError(f"expected progress as a callable, got {describe(progress)}")

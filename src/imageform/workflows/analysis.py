@@ -376,7 +376,6 @@ def fit_correction(run: Run, opts: FitCorrectionOptions, *, out: Path, charts: A
     in them: ``--chart-layout``), or one CSV; one image alone is fitted to the ColorChecker's
     published sRGB values.
     """
-    check_suffix(out, ".json", "-o", "the correction (JSON)")
     files = [Path(p) for p in charts]
     csvs = [p.suffix.lower() == ".csv" for p in files]
     if not (len(files) == 1 or (len(files) == 2 and not any(csvs))):

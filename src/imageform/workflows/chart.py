@@ -161,7 +161,6 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
     from imageform.analysis.synthetic import COLORCHECKER_SRGB8
     from imageform.io import write_image
 
-    check_suffix(out, ".json", "-o", "the result (JSON)")
     img = read(image, opts)
     if img.ndim != 3 or img.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got shape {img.shape}")
