@@ -53,6 +53,7 @@ def option(
     metavar: str | None = None,
     hidden: bool = False,
     output: bool = False,
+    folder: bool = False,
     input: bool = False,
     minimum: float | None = None,
     maximum: float | None = None,
@@ -79,6 +80,9 @@ def option(
     output, input : bool
         The field is a path the workflow writes (checked and written all or nothing with the
         main output) or reads (never overwritten by an output).
+    folder : bool
+        With ``output``: the path is a folder the workflow fills (``--force`` replaces it
+        whole), not a file.
     minimum, maximum : float, optional
         Bounds of a number (an ``int`` or ``float`` field), checked when the options are made;
         an ``int`` field without ``maximum`` is at most ``2**62``.
@@ -91,6 +95,7 @@ def option(
         "metavar": metavar,
         "hidden": hidden,
         "output": output,
+        "folder": folder,
         "input": input,
         "minimum": minimum,
         "maximum": maximum,
@@ -299,6 +304,12 @@ class Options:
     def types(cls) -> dict[str, Any]:
         """Return the evaluated type of each field."""
         return typing.get_type_hints(cls)
+
+    def output_folders(self) -> frozenset[str]:
+        """Return the names of the output fields that are folders (``folder=True``)."""
+        return frozenset(
+            f.name for f in dataclasses.fields(self) if f.metadata.get("folder", False)
+        )
 
     def paths(self, kind: str) -> tuple[Path, ...]:
         """Return the paths in fields declared ``output=True`` or ``input=True`` (by ``kind``)."""
