@@ -285,3 +285,42 @@ def test_a_data_output_under_another_name_is_refused_first(
     with pytest.raises(InvalidInputError, match=rf"{name} writes a .* file: give -o a "):
         execute(wf, out=out, options=wf.make_options(**required), **inputs)
     assert not out.exists()
+
+
+def _doc_blocks() -> list[tuple[str, list[str]]]:
+    """Each shell block of the docs as the list of its imageform command lines, in order."""
+    blocks: list[tuple[str, list[str]]] = []
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        in_block, pending, lines = False, "", []
+        for raw in page.read_text(encoding="utf-8").splitlines():
+            if raw.startswith("```"):
+                if lines:
+                    blocks.append((page.name, lines))
+                lines = []
+                in_block = raw.strip() in ("```bash", "```sh", "```console", "```shell")
+                continue
+            line = (pending + " " + raw.split(" #")[0].strip().removeprefix("$ ")).strip()
+            if line.endswith("\\"):
+                pending = line[:-1]
+                continue
+            pending = ""
+            if in_block and line.startswith("imageform "):
+                lines.append(line)
+    return blocks
+
+
+def test_a_doc_block_run_in_order_never_stops_on_its_own_output() -> None:
+    """A newcomer pastes a block's lines in order: a line that writes what an earlier line of
+    the block wrote needs --force, or it stops with 'output ... exists' (found walking
+    white-balance.md, biomedical.md, geometry.md and reconstruction.md). imageform batch
+    resumes into its folder and is left out."""
+    stops = []
+    for page, lines in _doc_blocks():
+        written: set[str] = set()
+        for line in lines:
+            args = shlex.split(line)
+            outs = {args[i + 1] for i, t in enumerate(args[:-1]) if t in ("-o", "--out")}
+            if args[1] != "batch" and "--force" not in args and outs & written:
+                stops.append(f"{page}: `{line}`")
+            written |= outs
+    assert not stops, stops
