@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import re
 from pathlib import Path
 
 import numpy as np
@@ -57,6 +58,20 @@ def test_sfr_refusals(tmp_path: Path) -> None:
         execute("sfr", image=src, out=None)
     with pytest.raises(InvalidInputError, match="--roi"):
         get_workflow("sfr").make_options(roi="1,2,3").check()
+
+
+@pytest.mark.parametrize(
+    ("values", "words"),
+    [
+        ({"min_angle": 50}, "expected --min-angle <= 40, got 50"),
+        ({"min_angle": 20, "max_angle": 10}, "expected --min-angle <= --max-angle, got 20 > 10"),
+    ],
+)
+def test_sfr_angle_bounds_name_the_flags(values: dict[str, float], words: str) -> None:
+    """The edge finder's angle bounds are refused with the options (they were the library's
+    'min_angle <= 40' after the image was read)."""
+    with pytest.raises(InvalidInputError, match=re.escape(words)):
+        get_workflow("sfr").make_options(**values)
 
 
 def test_sfr_of_a_raw_file_is_measured_on_its_mosaic(tmp_path: Path) -> None:

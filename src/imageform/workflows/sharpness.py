@@ -54,8 +54,12 @@ class SfrOptions(ImageIn):
         "line pairs per mm. Default: a DICOM's Imager Pixel Spacing (else Pixel Spacing).",
         metavar="LENGTH",
     )
-    min_angle: float = option(2.0, help="Smallest edge angle (deg) kept by the edge finder.")
-    max_angle: float = option(10.0, help="Largest edge angle (deg) kept by the edge finder.")
+    min_angle: float = option(
+        2.0, help="Smallest edge angle (deg) kept by the edge finder.", minimum=0, maximum=40
+    )
+    max_angle: float = option(
+        10.0, help="Largest edge angle (deg) kept by the edge finder.", minimum=0, maximum=40
+    )
 
     def region(self) -> tuple[int, int, int, int] | None:
         """Return the ``--roi`` as four integers, or None."""
@@ -83,6 +87,10 @@ class SfrOptions(ImageIn):
     def check(self) -> None:
         """Check the options, the ``--roi`` and the ``--pixel-pitch``."""
         super().check()
+        if self.min_angle > self.max_angle:
+            raise InvalidInputError(
+                f"expected --min-angle <= --max-angle, got {self.min_angle:g} > {self.max_angle:g}"
+            )
         self.region()
         self.pitch_mm()
 
