@@ -18,6 +18,7 @@ import pytest
 from imageform.cli import EXIT_CODES, main, root
 from imageform.cli._build import build_command
 from imageform.workflows import WORKFLOWS, choice_names
+from imageform.workflows._spec import flag_of
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -324,3 +325,23 @@ def test_a_doc_block_run_in_order_never_stops_on_its_own_output() -> None:
                 stops.append(f"{page}: `{line}`")
             written |= outs
     assert not stops, stops
+
+
+FOLDER_OUTPUTS = [n for n, wf in WORKFLOWS.items() if wf.output is not None and wf.output.folder]
+
+
+@pytest.mark.parametrize("name", FOLDER_OUTPUTS)
+def test_a_folder_output_is_not_given_a_file_name(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``reconstruct -o room.ply`` made a folder named room.ply holding points.ply: refused
+    before the inputs are read (they do not exist here), saying what the folder holds."""
+    wf = WORKFLOWS[name]
+    args = [name, *(["nothere"] * len(wf.inputs)), "-o", str(tmp_path / "result.json")]
+    required = [f for f in wf.options.fields() if f.default is dataclasses.MISSING]
+    for f in required:
+        args += [flag_of(f), str(EXAMPLES[f.name])]
+    assert main(args) == 1
+    err = capsys.readouterr().err
+    assert f"{name} writes a folder (" in err and "not the file name 'result.json'" in err, err
+    assert list(tmp_path.iterdir()) == []

@@ -84,6 +84,24 @@ def _check_data_suffix(wf: Workflow, out: Path) -> None:
         )
 
 
+#: Names of files, never of the folder a folder output (simulate, reconstruct...) writes.
+_FILE_SUFFIXES = frozenset(
+    (*IMAGE_SUFFIXES, ".ply", ".csv", ".json", ".html", ".toml", ".dng", ".mp4", ".txt")
+)
+
+
+def _check_folder_name(wf: Workflow, out: Path) -> None:
+    """Refuse ``reconstruct -o room.ply``: the command writes a folder, which would be named so."""
+    if wf.output is None or not wf.output.folder or out.is_dir():
+        return
+    if out.suffix.lower() in _FILE_SUFFIXES:
+        holds = wf.output.help.partition(": ")[2].split(" (replaced")[0].split("; replaced")[0]
+        raise InvalidInputError(
+            f"{wf.name} writes a folder ({holds}): give -o a folder name, not the file name "
+            f"{out.name!r}"
+        )
+
+
 def execute(
     workflow: Workflow | str,
     *,
@@ -135,6 +153,7 @@ def execute(
     if out is not None:
         out = as_path(out, "out (-o/--out)")
         _check_data_suffix(wf, Path(out))
+        _check_folder_name(wf, Path(out))
     force = as_bool(force, "force")
     if progress is not None and not callable(progress):
         raise InvalidInputError(f"expected progress as a callable, got {describe(progress)}")
