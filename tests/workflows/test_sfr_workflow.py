@@ -58,6 +58,10 @@ def test_sfr_refusals(tmp_path: Path) -> None:
         execute("sfr", image=src, out=None)
     with pytest.raises(InvalidInputError, match="--roi"):
         get_workflow("sfr").make_options(roi="1,2,3").check()
+    # an ROI off the image names the flag and the image (the library said 'roi')
+    opts = get_workflow("sfr").make_options(roi="10,10,100,20")
+    with pytest.raises(InvalidInputError, match=r"expected --roi x,y,w,h inside the 64x64 image"):
+        execute("sfr", image=src, out=None, options=opts)
 
 
 @pytest.mark.parametrize(

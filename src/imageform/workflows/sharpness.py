@@ -183,6 +183,12 @@ def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
     arr, names, transfer, pitch = _edge_image(image, opts)
     roi = opts.region()
     if roi is not None:
+        h, w = arr.shape[:2]
+        x, y, rw, rh = roi
+        if x < 0 or y < 0 or x + rw > w or y + rh > h:
+            raise InvalidInputError(
+                f"expected --roi x,y,w,h inside the {w}x{h} image {image.name}, got {opts.roi}"
+            )
         regions = [(roi, "roi")]
     else:
         found = find_slanted_edges(arr, min_angle=opts.min_angle, max_angle=opts.max_angle)
