@@ -225,6 +225,10 @@ UNITS = {
     ("stereo-calibrate", "half_window"): "pixels",
     ("track", "fps"): "frames/s",
     ("flatfield", "working_size"): "pixels",
+    ("segment", "s"): "0-1 (OpenCV's 0-255 with --opencv-ranges)",
+    ("segment", "v"): "0-1 (OpenCV's 0-255 with --opencv-ranges)",
+    ("segment", "h"): "degrees, 0-360 (OpenCV's 0-180",
+    ("sfr", "roi"): "in pixels",
 }
 
 

@@ -102,11 +102,20 @@ class SegmentOptions(ImageIn, RgbFrom):
 
     h: str | None = option(
         None,
-        help="Hue range LOW:HIGH in degrees (LOW > HIGH wraps); default 0:40.",
+        help="Hue range LOW:HIGH in degrees, 0-360 (OpenCV's 0-180 with --opencv-ranges; "
+        "LOW > HIGH wraps); default 0:40.",
         metavar="LO:HI",
     )
-    s: str | None = option(None, help="Saturation LOW:HIGH; default 30/255:1.", metavar="LO:HI")
-    v: str | None = option(None, help="Value LOW:HIGH; default 80/255:1.", metavar="LO:HI")
+    s: str | None = option(
+        None,
+        help="Saturation LOW:HIGH, 0-1 (OpenCV's 0-255 with --opencv-ranges); default 30/255:1.",
+        metavar="LO:HI",
+    )
+    v: str | None = option(
+        None,
+        help="Value LOW:HIGH, 0-1 (OpenCV's 0-255 with --opencv-ranges); default 80/255:1.",
+        metavar="LO:HI",
+    )
     opencv_ranges: bool = option(
         False, help="Read --h in 0-180 and --s/--v in 0-255 (OpenCV's units)."
     )

@@ -37,8 +37,8 @@ class SfrOptions(ImageIn):
 
     roi: str | None = option(
         None,
-        help="Region x,y,w,h (column, row of its top-left pixel, width, height) holding one "
-        "slanted edge; default: find the edges of a chart of dark squares.",
+        help="Region x,y,w,h in pixels (column, row of its top-left pixel, width, height) "
+        "holding one slanted edge; default: find the edges of a chart of dark squares.",
         metavar="X,Y,W,H",
     )
     transfer: _Transfer = option(
