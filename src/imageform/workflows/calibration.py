@@ -311,10 +311,21 @@ class _BoardChecks:
             )
 
     def square_mm(self) -> float:
-        """Return the square size in millimetres."""
+        """Return the square size in millimetres (0.1 um to 1000 m: beyond, the fit fails)."""
         from imageform._units import parse_length
 
-        return parse_length(self.square, "--square", default_unit="mm", unit="mm")
+        mm = parse_length(self.square, "--square", default_unit="mm", unit="mm")
+        if not SQUARE_MM[0] * (1 - 1e-9) <= mm <= SQUARE_MM[1] * (1 + 1e-9):
+            raise InvalidInputError(
+                f"expected --square from 0.1um to 1000m (a printed board: 2mm to 100mm), got "
+                f"{self.square}"
+            )
+        return mm
+
+
+#: The sizes of a square ``--square`` takes, in mm: calibrations of views of the same board with
+#: squares of 1e-12 mm to 1e9 mm agree to the printed digits; 1e-20 mm and 1e12 m do not converge.
+SQUARE_MM = (1e-4, 1e6)
 
 
 @contextmanager
