@@ -189,6 +189,19 @@ def test_white_balance_manual_and_percentile_usage(
     assert main([*base, "--method", "manual", "--cct", "3200"]) == 0
 
 
+@pytest.mark.parametrize("name", ["convert", "white-balance", "cvd", "mosaic"])
+def test_a_16_bit_jpeg_is_refused_first_by_its_own_name(
+    name: str, rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """-o x.jpg --bit-depth 16 named the writer's temporary file ('.x.jpg.123-ab.part.png')."""
+    extra = ["--type", "deutan"] if name == "cvd" else []
+    out = tmp_path / "x.jpg"
+    assert main([name, str(rgb_png), "-o", str(out), "--bit-depth", "16", *extra]) == 1
+    err = capsys.readouterr().err
+    assert "JPEG holds 8 bits per sample: give -o x.png or x.tif for --bit-depth 16" in err
+    assert ".part" not in err and not out.exists()
+
+
 def test_info_says_what_a_file_holds(
     rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

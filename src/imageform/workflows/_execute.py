@@ -102,6 +102,18 @@ def _check_folder_name(wf: Workflow, out: Path) -> None:
         )
 
 
+def _check_jpeg_depth(opts: Options, out: Path) -> None:
+    """Refuse ``-o x.jpg --bit-depth 16`` before the work.
+
+    The writer's message named its temporary file, after the work.
+    """
+    if getattr(opts, "bit_depth", None) == 16 and out.suffix.lower() in (".jpg", ".jpeg"):
+        raise InvalidInputError(
+            f"JPEG holds 8 bits per sample: give -o {out.stem}.png or {out.stem}.tif for "
+            "--bit-depth 16"
+        )
+
+
 def execute(
     workflow: Workflow | str,
     *,
@@ -162,6 +174,8 @@ def execute(
         raise InvalidInputError(
             f"expected options as {wf.options.__name__} for {wf.name}, got {type(opts).__name__}"
         )
+    if out is not None:
+        _check_jpeg_depth(opts, Path(out))
     names = {i.name for i in wf.inputs}
     if set(inputs) != names:
         raise InvalidInputError(
