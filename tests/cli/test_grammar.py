@@ -262,11 +262,12 @@ def test_a_file_option_without_its_value_names_it(
     assert f"'{flag}'" in err
 
 
-#: One wrong name per command that writes a data file (TOML, CSV, JSON), never an image.
+#: The commands whose output is a data file (TOML, CSV, JSON) or a figure (SVG, PDF).
 DATA_OUTPUTS = [
     (name, wf.suffixes)
     for name, wf in WORKFLOWS.items()
-    if wf.output is not None and wf.suffixes and not set(wf.suffixes) & {".png", ".tif"}
+    if wf.output is not None
+    and set(wf.suffixes) - {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy"}
 ]
 
 
@@ -275,7 +276,8 @@ def test_a_data_output_under_another_name_is_refused_first(
     name: str, suffixes: tuple[str, ...], tmp_path: Path
 ) -> None:
     """``calibrate -o cam.json`` wrote TOML into a .json file, ``emva -o e.png`` JSON into a
-    .png: refused before any input is read (the inputs here do not exist)."""
+    .png, ``gamut -o g.txt`` failed in matplotlib: refused before any input is read (the inputs
+    here do not exist)."""
     from imageform.errors import InvalidInputError
     from imageform.workflows import execute
 
@@ -286,7 +288,7 @@ def test_a_data_output_under_another_name_is_refused_first(
     if name == "project":  # a camera: a file or a focal length
         required["fx"] = 500.0
     inputs = {i.name: ["nothere.png"] if i.many else "nothere.png" for i in wf.inputs}
-    out = tmp_path / "result.png"
+    out = tmp_path / "result.txt"
     with pytest.raises(InvalidInputError, match=rf"{name} writes a .* file: give -o a "):
         execute(wf, out=out, options=wf.make_options(**required), **inputs)
     assert not out.exists()

@@ -71,11 +71,11 @@ def _note_of(w: warnings.WarningMessage) -> str:
 def _check_data_suffix(wf: Workflow, out: Path) -> None:
     """Refuse a main output of a data file (camera file, table, JSON) under another kind's name.
 
-    ``calibrate -o cam.json`` or ``emva -o e.png`` would write TOML or JSON there. Only for
-    workflows that write no image (their ``suffixes`` share none with the images'), before
-    anything is read.
+    ``calibrate -o cam.json`` or ``emva -o e.png`` would write TOML or JSON there, ``gamut -o
+    g.txt`` failed in matplotlib. For workflows whose ``suffixes`` name a file that is not an
+    image (the image writers refuse a wrong suffix themselves), before anything is read.
     """
-    if not wf.suffixes or set(wf.suffixes) & set(IMAGE_SUFFIXES):
+    if not set(wf.suffixes) - set(IMAGE_SUFFIXES):
         return
     if out.suffix.lower() not in wf.suffixes:
         kinds = " or ".join(wf.suffixes)
