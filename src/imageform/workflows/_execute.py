@@ -210,7 +210,11 @@ def execute(
             run = Run(outputs, progress=progress, gathered=frozenset(gathered))
             if out is not None:  # checked before any work starts
                 (run.folder if wf.output is not None and wf.output.folder else run.file)(out)
-            folders = {Path(v) for n in opts.output_folders() if (v := getattr(opts, n))}
+            folders = {
+                Path(v)
+                for f in opts.fields()
+                if f.metadata.get("folder") and (v := getattr(opts, f.name)) is not None
+            }
             for extra in opts.paths("output"):  # a folder option (simulate --lab) is one
                 (run.folder if extra in folders else run.file)(extra)
             with warnings.catch_warnings(record=True) as caught:

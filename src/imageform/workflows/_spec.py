@@ -305,12 +305,6 @@ class Options:
         """Return the evaluated type of each field."""
         return typing.get_type_hints(cls)
 
-    def output_folders(self) -> frozenset[str]:
-        """Return the names of the output fields that are folders (``folder=True``)."""
-        return frozenset(
-            f.name for f in dataclasses.fields(self) if f.metadata.get("folder", False)
-        )
-
     def paths(self, kind: str) -> tuple[Path, ...]:
         """Return the paths in fields declared ``output=True`` or ``input=True`` (by ``kind``)."""
         out: list[Path] = []
