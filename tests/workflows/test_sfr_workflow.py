@@ -229,11 +229,19 @@ def test_sfr_pixel_pitch_sources_and_units(tmp_path: Path) -> None:
     assert "pixel_pitch_mm" not in s and "mtf50_lp_per_mm" not in s["edges"][0]["channels"]
 
 
-@pytest.mark.parametrize("bad", ["-3um", "0", "abc", "5parsec", "nan"])
+@pytest.mark.parametrize("bad", ["-3um", "0", "abc", "5parsec", "nan", "1e30", "0.01um", "2cm"])
 def test_sfr_bad_pixel_pitch_is_one_line(bad: str) -> None:
     with pytest.raises(InvalidInputError, match="--pixel-pitch") as err:
         get_workflow("sfr").make_options(pixel_pitch=bad).check()
     assert "\n" not in str(err.value)
+
+
+def test_sfr_pixel_pitch_range() -> None:
+    """1e30 (um) gave MTF50 0.000 lp/mm without a word; the bounds themselves are taken."""
+    with pytest.raises(InvalidInputError, match=r"expected --pixel-pitch from 0.1um to 10mm"):
+        get_workflow("sfr").make_options(pixel_pitch="1e30")
+    for ok in ("0.1um", "10mm", "139um", "3.76"):
+        assert get_workflow("sfr").make_options(pixel_pitch=ok).pitch_mm() is not None
 
 
 def test_sfr_pixel_pitch_on_the_command_line(

@@ -82,7 +82,13 @@ class SfrOptions(ImageIn):
             return None
         from imageform._units import parse_length
 
-        return parse_length(self.pixel_pitch, "--pixel-pitch", default_unit="um", unit="mm")
+        mm = parse_length(self.pixel_pitch, "--pixel-pitch", default_unit="um", unit="mm")
+        if not 1e-4 * (1 - 1e-9) <= mm <= 10.0 * (1 + 1e-9):
+            raise InvalidInputError(
+                f"expected --pixel-pitch from 0.1um to 10mm (a camera's 1-10um, an X-ray "
+                f"detector's 50-200um), got {self.pixel_pitch}"
+            )
+        return mm
 
     def check(self) -> None:
         """Check the options, the ``--roi`` and the ``--pixel-pitch``."""
