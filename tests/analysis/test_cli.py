@@ -131,6 +131,12 @@ def test_stain_normalize(tmp_path: Path, capsys, method: str) -> None:  # type: 
         == 0
     )
     np.testing.assert_array_equal(read_image(out2), read_image(out))
+    # the other method with these statistics: which method saved them, not 'got kind'
+    other = "reinhard" if method == "macenko" else "macenko"
+    argv = ["stain-normalize", str(pa), "-o", str(tmp_path / "o3.png"), "--method", other]
+    assert main([*argv, "--target", str(stats)]) == 1
+    err = capsys.readouterr().err
+    assert f"was saved by --method {method}: normalise with --method {method}" in err
 
 
 def test_stain_normalize_errors(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]

@@ -256,7 +256,17 @@ def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
 
     if opts.target.suffix.lower() == ".json":
         kind = analysis.MacenkoStains if opts.method == "macenko" else analysis.ReinhardStats
-        return kind.from_json(opts.target)
+        try:
+            return kind.from_json(opts.target)
+        except InvalidInputError as exc:  # a target saved by the other method
+            saved = {"'macenko_stains'": "macenko", "'reinhard_stats'": "reinhard"}
+            other = next((m for k, m in saved.items() if str(exc).endswith(f"got kind {k}")), None)
+            if other is None or other == opts.method:
+                raise
+            raise InvalidInputError(
+                f"--target {opts.target} was saved by --method {other}: normalise with "
+                f"--method {other}, or give the reference image for --method {opts.method}"
+            ) from None
     ref = _srgb(run, opts.target, opts, clip=True)[1]
     mask = _stain_mask(opts, ref, target=True)
     if opts.method == "macenko":
