@@ -72,6 +72,14 @@ def test_segment_refuses_to_overwrite_input(tmp_path: Path, capsys) -> None:  # 
     assert "also an input" in capsys.readouterr().err
     assert main(["segment", str(src), "--h", "a:b", "--out", str(tmp_path / "m.png")]) == 2
     assert "LOW:HIGH" in capsys.readouterr().err  # checked with the options: a usage error
+    # the docs' OpenCV S and V without --opencv-ranges: the flag is named, not the keyword
+    args = ["segment", str(src), "--s", "30:255", "--out", str(tmp_path / "m.png")]
+    assert main(args) == 1
+    err = capsys.readouterr().err
+    assert (
+        "expected --s bounds in [0, 1] (unit range), got (30.0, 255.0); OpenCV's 0 to 255 " in err
+    )
+    assert err.rstrip().endswith("codes with --opencv-ranges") and "opencv_ranges=" not in err
 
 
 def test_segment_empty_mask_is_reported(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
@@ -123,6 +131,12 @@ def test_stain_normalize(tmp_path: Path, capsys, method: str) -> None:  # type: 
         == 0
     )
     np.testing.assert_array_equal(read_image(out2), read_image(out))
+    # the other method with these statistics: which method saved them, not 'got kind'
+    other = "reinhard" if method == "macenko" else "macenko"
+    argv = ["stain-normalize", str(pa), "-o", str(tmp_path / "o3.png"), "--method", other]
+    assert main([*argv, "--target", str(stats)]) == 1
+    err = capsys.readouterr().err
+    assert f"was saved by --method {method}: normalise with --method {method}" in err
 
 
 def test_stain_normalize_errors(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]

@@ -165,6 +165,7 @@ def test_iou_properties(a: np.ndarray, b: np.ndarray) -> None:
         ({"h": (0, 400)}, r"h bounds in \[0, 360\]"),
         ({"s": (0.5, 0.2)}, "s low <= high"),
         ({"v": (0, 300)}, r"v bounds in \[0, 1\]"),
+        ({"s": (30, 255)}, r"s bounds in \[0, 1\].*OpenCV's 0 to 255 codes with opencv_ranges"),
         ({"h": 5}, r"\(low, high\) pair"),
         ({"open_radius": -1}, "open_radius as an integer >= 0"),
         ({"min_area": 2.5}, "min_area as an integer"),

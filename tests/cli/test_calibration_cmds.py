@@ -117,6 +117,39 @@ def test_calibrate_bad_input(
     assert "unknown --fix 'focal'; valid: fx, fy" in capsys.readouterr().err
 
 
+def test_calibrate_plot_suffix_checked_first(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A --plot matplotlib cannot write is a usage error before any view is read, not a
+    ValueError from matplotlib after the calibration (nothing written)."""
+    one = str(shared_data / "opencv-left" / "left01.jpg")
+    out = tmp_path / "cam.toml"
+    args = ["calibrate", one, "--board", "9x6", "-o", str(out)]
+    assert main([*args, "--plot", str(tmp_path / "errors.txt")]) == 2
+    err = capsys.readouterr().err
+    assert "expected --plot as a .png, .svg or .pdf file, got 'errors.txt'" in err
+    assert "ValueError" not in err and not out.exists()
+
+
+def test_calibrate_square_out_of_any_board_s_range(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--square 1e-30mm calibrated OpenCV's views to RMS 3 px with every k at 0, and 1e12m did
+    not converge: a usage error now; 0.1um and 1000m, the bounds, still calibrate alike."""
+    views = str(shared_data / "opencv-left" / "left0[1-4].jpg")
+    for square in ("1e-30mm", "0.05um", "1001m", "1e12m"):
+        out = tmp_path / "bad.toml"
+        assert main(["calibrate", views, "--board", "9x6", "--square", square, "-o", str(out)]) == 2
+        assert "expected --square from 0.1um to 1000m" in capsys.readouterr().err
+        assert not out.exists()
+    fx = []
+    for square in ("0.1um", "25mm", "1000m"):
+        out = tmp_path / f"{square}.toml"
+        assert main(["calibrate", views, "--board", "9x6", "--square", square, "-o", str(out)]) == 0
+        fx.append(read_camera(out).camera.K[0, 0])
+    assert max(fx) - min(fx) < 1e-3, fx
+
+
 def test_calibrate_literal_bracket_names(
     shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

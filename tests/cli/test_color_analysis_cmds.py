@@ -97,3 +97,32 @@ def test_delta_e_reads_each_file_s_declared_space(
     assert json.loads(capsys.readouterr().out)["mean"] > 1.0
     assert main(["delta-e", ref, bare, "--from", "lab"]) == 2  # a usage error
     assert "delta-e compares RGB images" in capsys.readouterr().err
+
+
+def test_correction_files_are_json_and_read_as_such(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A correction or patch table is not written under an image's name (JSON in f.png), and
+    an image given as a correction file is refused in one line, not a UnicodeDecodeError."""
+    from imageform.analysis import synthetic_chart_image
+
+    chart = _png(tmp_path / "chart.png", (synthetic_chart_image() * 255).round().astype(np.uint8))
+    c = str(chart)
+    for args, needle, code in (
+        (["fit-correction", c, "-o", str(tmp_path / "f.png")], "give -o a .json name", 1),
+        (["chart", c, "-o", str(tmp_path / "c.txt")], "give -o a .json name", 1),
+        (["chart", c, "-o", str(tmp_path / "c.json"), "--csv", str(tmp_path / "p.json")],
+         "--csv writes the patch table (CSV): give a .csv name, not 'p.json'", 2),
+        (["chart", c, "-o", str(tmp_path / "c.json"), "--correction", str(tmp_path / "k.png")],
+         "--correction writes the correction (JSON)", 2),
+        (["harmonize", c, "-o", str(tmp_path / "h.png"), "--chart", c, "--save-correction",
+          str(tmp_path / "s.png")], "--save-correction writes the correction (JSON)", 2),
+        (["harmonize", c, "-o", str(tmp_path / "h.png"), "--correction", c],
+         "chart.png is not a 'color_correction' file: not text", 1),
+        (["stain-normalize", c, "-o", str(tmp_path / "n.png"), "--target", c, "--save-target",
+          str(tmp_path / "t.png")], "--save-target writes the target's statistics (JSON)", 2),
+    ):  # fmt: skip
+        assert main(args) == code, args
+        err = capsys.readouterr().err
+        assert needle in err and "Unicode" not in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["chart.png"]

@@ -171,6 +171,37 @@ def test_white_balance_keeps_the_input_s_profile(rgb_png: Path, tmp_path: Path) 
     assert image_color_space(plain).name is None
 
 
+def test_white_balance_manual_and_percentile_usage(
+    rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The docs' manual line without its --cct, or a percentile over 100: usage errors that name
+    the command's flags (not 'illuminant= or cct=', the Python keywords), nothing written."""
+    out = tmp_path / "wb.png"
+    base = ["white-balance", str(rgb_png), "-o", str(out)]
+    for extra, needle, code in (
+        (["--method", "manual"], "--method manual takes one of --cct KELVIN", 1),
+        (["--method", "manual", "--cct", "3200", "--illuminant", "A"], "one of --cct", 1),
+        (["--method", "white-patch", "--percentile", "150"], "expected --percentile <= 100", 2),
+    ):
+        assert main([*base, *extra]) == code, extra
+        assert needle in capsys.readouterr().err
+    assert not out.exists()
+    assert main([*base, "--method", "manual", "--cct", "3200"]) == 0
+
+
+@pytest.mark.parametrize("name", ["convert", "white-balance", "cvd", "mosaic"])
+def test_a_16_bit_jpeg_is_refused_first_by_its_own_name(
+    name: str, rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """-o x.jpg --bit-depth 16 named the writer's temporary file ('.x.jpg.123-ab.part.png')."""
+    extra = ["--type", "deutan"] if name == "cvd" else []
+    out = tmp_path / "x.jpg"
+    assert main([name, str(rgb_png), "-o", str(out), "--bit-depth", "16", *extra]) == 1
+    err = capsys.readouterr().err
+    assert "JPEG holds 8 bits per sample: give -o x.png or x.tif for --bit-depth 16" in err
+    assert ".part" not in err and not out.exists()
+
+
 def test_info_says_what_a_file_holds(
     rgb_png: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -27,6 +27,7 @@ from imageform.io import (
     StereoCameraFile,
     read_image,
     read_stereo_camera,
+    write_camera,
     write_image,
     write_stereo_camera,
 )
@@ -353,6 +354,9 @@ def test_depth_refusals_write_nothing(
         write_stereo_camera(tmp_path / f"{name}.toml", replace(sf, right=second))
     single = tmp_path / "single.toml"
     single.write_text("[intrinsics]\nfx = 400.0\nfy = 400.0\ncx = 160.0\ncy = 120.0\n")
+    v1 = tmp_path / "cam.toml"
+    (tmp_path / "uv.csv").write_text("X,Y,Z,u,v\n0,0,1,160,120\n")
+    write_camera(v1, replace(sf.left, path=None))
     cases = [
         ([left, str(tmp_path / "small.png"), *ok], "small.png is 120 x 100 px"),
         ([left, str(tmp_path / "nan.npy"), *ok], "nan.npy"),
@@ -364,6 +368,9 @@ def test_depth_refusals_write_nothing(
         ([left, right, "--camera", str(tmp_path / "near.toml"), "-o", str(out)], "within 3 st"),
         ([left, right, "--camera", str(single), "-o", str(out)], "single.toml"),
         ([left, right, "--camera", str(tmp_path / "none.toml"), "-o", str(out)], "none.toml"),
+        # a newcomer's mistakes: calibrate's single-camera file, an image as the camera file
+        ([left, right, "--camera", str(v1), "-o", str(out)], "written by imageform stereo-"),
+        ([left, right, "--camera", left, "-o", str(out)], "not a stereo camera file: not text"),
         ([left, right, "--camera", rig, "-o", str(tmp_path / "z.png")], "z.png"),
     ]
     for args, needle in cases:
@@ -372,6 +379,9 @@ def test_depth_refusals_write_nothing(
         assert needle in line, (args, line)
         assert not out.exists() and not (tmp_path / "c.txt").exists()
     # the command line's own range check (a usage error, exit 2)
+    # the other way round: the rig file where one camera's file is read
+    assert main(["pose", rig, str(tmp_path / "uv.csv"), "-o", str(tmp_path / "p.toml")]) == 1
+    assert "a stereo camera file, as stereo-calibrate writes it" in _line(capsys)
     assert main(["depth", left, right, *ok, "--num-disparities", "0"]) == 2
     assert "expected --num-disparities >= 1, got 0" in capsys.readouterr().err
     # a failure after the depth map is computed leaves neither output: --points is refused

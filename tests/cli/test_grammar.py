@@ -18,6 +18,7 @@ import pytest
 from imageform.cli import EXIT_CODES, main, root
 from imageform.cli._build import build_command
 from imageform.workflows import WORKFLOWS, choice_names
+from imageform.workflows._spec import flag_of
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -212,3 +213,141 @@ def test_the_old_bits_flag_stays_hidden_beside_bit_depth(name: str) -> None:
     }
     with pytest.warns(DeprecationWarning, match="use bit_depth="):
         assert wf.options(**required, bits=16).bit_depth == 16
+
+
+#: Numeric options of a measured quantity, and a unit their --help must name.
+UNITS = {
+    ("project", "cx"): "pixels",
+    ("project", "cy"): "pixels",
+    ("project", "skew"): "pixels",
+    ("triangulate", "sigma"): "px",
+    ("calibrate", "half_window"): "pixels",
+    ("stereo-calibrate", "half_window"): "pixels",
+    ("track", "fps"): "frames/s",
+    ("flatfield", "working_size"): "pixels",
+    ("segment", "s"): "0-1 (OpenCV's 0-255 with --opencv-ranges)",
+    ("segment", "v"): "0-1 (OpenCV's 0-255 with --opencv-ranges)",
+    ("segment", "h"): "degrees, 0-360 (OpenCV's 0-180",
+    ("sfr", "roi"): "in pixels",
+}
+
+
+@pytest.mark.parametrize(("name", "field"), list(UNITS))
+def test_measured_options_say_their_unit(name: str, field: str) -> None:
+    """A newcomer reading --help learns the unit of a number (found missing walking the docs)."""
+    (f,) = [f for f in WORKFLOWS[name].options.fields() if f.name == field]
+    assert UNITS[name, field] in f.metadata["help"]
+
+
+def _path_flags(name: str) -> list[str]:
+    cmd = build_command(WORKFLOWS[name])
+    return [
+        p.opts[-1]
+        for p in cmd.params
+        if isinstance(p, click.Option) and isinstance(p.type, click.Path) and not p.hidden
+    ]
+
+
+@pytest.mark.parametrize(
+    ("name", "flag"), [(n, f) for n in WORKFLOWS for f in _path_flags(n)], ids=str
+)
+def test_a_file_option_without_its_value_names_it(
+    name: str, flag: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--corners --plot p.png`` forgot the corners' file: a usage error naming --corners,
+    not a file named --plot and 'input file p.png does not exist' after the work."""
+    assert main([name, flag, "--json"]) == 2
+    err = capsys.readouterr().err
+    assert "a file name is missing: got the option --json instead" in err, err
+    assert f"'{flag}'" in err
+
+
+#: The commands whose output is a data file (TOML, CSV, JSON) or a figure (SVG, PDF).
+DATA_OUTPUTS = [
+    (name, wf.suffixes)
+    for name, wf in WORKFLOWS.items()
+    if wf.output is not None
+    and set(wf.suffixes) - {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy"}
+]
+
+
+@pytest.mark.parametrize(("name", "suffixes"), DATA_OUTPUTS, ids=[n for n, _ in DATA_OUTPUTS])
+def test_a_data_output_under_another_name_is_refused_first(
+    name: str, suffixes: tuple[str, ...], tmp_path: Path
+) -> None:
+    """``calibrate -o cam.json`` wrote TOML into a .json file, ``emva -o e.png`` JSON into a
+    .png, ``gamut -o g.txt`` failed in matplotlib: refused before any input is read (the inputs
+    here do not exist)."""
+    from imageform.errors import InvalidInputError
+    from imageform.workflows import execute
+
+    wf = WORKFLOWS[name]
+    required = {
+        f.name: EXAMPLES[f.name] for f in wf.options.fields() if f.default is dataclasses.MISSING
+    }
+    if name == "project":  # a camera: a file or a focal length
+        required["fx"] = 500.0
+    inputs = {i.name: ["nothere.png"] if i.many else "nothere.png" for i in wf.inputs}
+    out = tmp_path / "result.txt"
+    with pytest.raises(InvalidInputError, match=rf"{name} writes a .* file: give -o a "):
+        execute(wf, out=out, options=wf.make_options(**required), **inputs)
+    assert not out.exists()
+
+
+def _doc_blocks() -> list[tuple[str, list[str]]]:
+    """Each shell block of the docs as the list of its imageform command lines, in order."""
+    blocks: list[tuple[str, list[str]]] = []
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        in_block, pending, lines = False, "", []
+        for raw in page.read_text(encoding="utf-8").splitlines():
+            if raw.startswith("```"):
+                if lines:
+                    blocks.append((page.name, lines))
+                lines = []
+                in_block = raw.strip() in ("```bash", "```sh", "```console", "```shell")
+                continue
+            line = (pending + " " + raw.split(" #")[0].strip().removeprefix("$ ")).strip()
+            if line.endswith("\\"):
+                pending = line[:-1]
+                continue
+            pending = ""
+            if in_block and line.startswith("imageform "):
+                lines.append(line)
+    return blocks
+
+
+def test_a_doc_block_run_in_order_never_stops_on_its_own_output() -> None:
+    """A newcomer pastes a block's lines in order: a line that writes what an earlier line of
+    the block wrote needs --force, or it stops with 'output ... exists' (found walking
+    white-balance.md, biomedical.md, geometry.md and reconstruction.md). imageform batch
+    resumes into its folder and is left out."""
+    stops = []
+    for page, lines in _doc_blocks():
+        written: set[str] = set()
+        for line in lines:
+            args = shlex.split(line)
+            outs = {args[i + 1] for i, t in enumerate(args[:-1]) if t in ("-o", "--out")}
+            if args[1] != "batch" and "--force" not in args and outs & written:
+                stops.append(f"{page}: `{line}`")
+            written |= outs
+    assert not stops, stops
+
+
+FOLDER_OUTPUTS = [n for n, wf in WORKFLOWS.items() if wf.output is not None and wf.output.folder]
+
+
+@pytest.mark.parametrize("name", FOLDER_OUTPUTS)
+def test_a_folder_output_is_not_given_a_file_name(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``reconstruct -o room.ply`` made a folder named room.ply holding points.ply: refused
+    before the inputs are read (they do not exist here), saying what the folder holds."""
+    wf = WORKFLOWS[name]
+    args = [name, *(["nothere"] * len(wf.inputs)), "-o", str(tmp_path / "result.json")]
+    required = [f for f in wf.options.fields() if f.default is dataclasses.MISSING]
+    for f in required:
+        args += [flag_of(f), str(EXAMPLES[f.name])]
+    assert main(args) == 1
+    err = capsys.readouterr().err
+    assert f"{name} writes a folder (" in err and "not the file name 'result.json'" in err, err
+    assert list(tmp_path.iterdir()) == []

@@ -4,6 +4,7 @@ the simulator's own camera file, and that file renders the scene again (--camera
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -39,13 +40,38 @@ def test_simulate_then_calibrate_gives_back_the_truth_camera(session: tuple[Path
     Kt, Ke = np.asarray(truth.camera.K), np.asarray(est.camera.K)
     for (i, j), name in (((0, 0), "fx"), ((1, 1), "fy"), ((0, 2), "cx"), ((1, 2), "cy")):
         assert abs(Ke[i, j] / Kt[i, j] - 1) < 0.005, (name, Ke[i, j], Kt[i, j])
-    # measured: fx -0.15 %, fy -0.11 %, cx +0.13 %, cy -0.07 %, k1 +0.9 %
+    # measured: fx -0.012 %, fy -0.015 %, cx +0.075 %, cy -0.032 %, k1 +1.40 % (docs below)
     k1t, k1e = truth.camera.distortion.k1, est.camera.distortion.k1
     assert abs(k1e / k1t - 1) < 0.02, (k1e, k1t)
     assert truth.has_pose and not est.has_pose  # a calibration gives no pose of its own
     assert truth.provenance.command == "imageform simulate"
     assert est.provenance.command.startswith("imageform calibrate")
     assert est.provenance.views_used == 8
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_the_docs_show_what_this_session_gives(session: tuple[Path, Path]) -> None:
+    """docs/tracking.md prints this calibration's line and docs/simulate.md its errors against
+    the truth: a newcomer running the commands sees the same (they had gone stale when the
+    corner refinement changed)."""
+    sim, cam = session
+    truth, est = read_camera(sim / "camera.toml").camera, read_camera(cam).camera
+    Kt, Ke = np.asarray(truth.K), np.asarray(est.K)
+    where = {"fx": (0, 0), "fy": (1, 1), "cx": (0, 2), "cy": (1, 2)}
+    tracking = (ROOT / "docs" / "tracking.md").read_text()
+    line = re.search(r"^RMS [\d.]+ px over 8 views; fx ([\d.]+) .*$", tracking, re.MULTILINE)
+    assert line is not None
+    for name, (i, j) in where.items():
+        shown = re.search(rf"{name} ([\d.]+)", line.group(0))
+        assert shown is not None and abs(float(shown.group(1)) - Ke[i, j]) < 6e-4, name
+    simulate = " ".join((ROOT / "docs" / "simulate.md").read_text().split())
+    shown_pct = re.search(r"`cam.toml` then matches `sim/camera.toml` \(([^)]*)\)", simulate)
+    assert shown_pct is not None
+    pct = dict(re.findall(r"(fx|fy|cx|cy|k1) ([−+-][\d.]+) %", shown_pct.group(1)))
+    for name, (i, j) in where.items():
+        assert abs(float(pct[name].replace("−", "-")) - 100 * (Ke[i, j] / Kt[i, j] - 1)) < 6e-4
+    k1 = 100 * (est.distortion.k1 / truth.distortion.k1 - 1)
+    assert abs(float(pct["k1"].replace("−", "-")) - k1) < 6e-3
 
 
 def test_the_calibrated_file_renders_the_scene_again(

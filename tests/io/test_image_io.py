@@ -204,6 +204,11 @@ def test_truncated_and_corrupt_files(tmp_path: Path, name: str) -> None:
 def test_errors(tmp_path: Path) -> None:
     with pytest.raises(InvalidInputError, match=r"unknown image file type '\.avif'"):
         read_image(tmp_path / "a.avif")
+    # an output name says what can be written, not the read-only formats alone (.webp, .dcm)
+    with pytest.raises(InvalidInputError) as info:
+        write_image(tmp_path / "out.txt", np.zeros((2, 2)))
+    assert str(info.value).endswith("and writes .png, .jpg, .jpeg, .tif, .tiff, .npy")
+    assert not (tmp_path / "out.txt").exists()
     with pytest.raises(InvalidInputError, match="does not exist"):
         read_image(tmp_path / "missing.png")
     (tmp_path / "dir.png").mkdir()

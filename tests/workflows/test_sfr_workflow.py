@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import re
 from pathlib import Path
 
 import numpy as np
@@ -57,6 +58,24 @@ def test_sfr_refusals(tmp_path: Path) -> None:
         execute("sfr", image=src, out=None)
     with pytest.raises(InvalidInputError, match="--roi"):
         get_workflow("sfr").make_options(roi="1,2,3").check()
+    # an ROI off the image names the flag and the image (the library said 'roi')
+    opts = get_workflow("sfr").make_options(roi="10,10,100,20")
+    with pytest.raises(InvalidInputError, match=r"expected --roi x,y,w,h inside the 64x64 image"):
+        execute("sfr", image=src, out=None, options=opts)
+
+
+@pytest.mark.parametrize(
+    ("values", "words"),
+    [
+        ({"min_angle": 50}, "expected --min-angle <= 40, got 50"),
+        ({"min_angle": 20, "max_angle": 10}, "expected --min-angle <= --max-angle, got 20 > 10"),
+    ],
+)
+def test_sfr_angle_bounds_name_the_flags(values: dict[str, float], words: str) -> None:
+    """The edge finder's angle bounds are refused with the options (they were the library's
+    'min_angle <= 40' after the image was read)."""
+    with pytest.raises(InvalidInputError, match=re.escape(words)):
+        get_workflow("sfr").make_options(**values)
 
 
 def test_sfr_of_a_raw_file_is_measured_on_its_mosaic(tmp_path: Path) -> None:
@@ -210,11 +229,19 @@ def test_sfr_pixel_pitch_sources_and_units(tmp_path: Path) -> None:
     assert "pixel_pitch_mm" not in s and "mtf50_lp_per_mm" not in s["edges"][0]["channels"]
 
 
-@pytest.mark.parametrize("bad", ["-3um", "0", "abc", "5parsec", "nan"])
+@pytest.mark.parametrize("bad", ["-3um", "0", "abc", "5parsec", "nan", "1e30", "0.01um", "2cm"])
 def test_sfr_bad_pixel_pitch_is_one_line(bad: str) -> None:
     with pytest.raises(InvalidInputError, match="--pixel-pitch") as err:
         get_workflow("sfr").make_options(pixel_pitch=bad).check()
     assert "\n" not in str(err.value)
+
+
+def test_sfr_pixel_pitch_range() -> None:
+    """1e30 (um) gave MTF50 0.000 lp/mm without a word; the bounds themselves are taken."""
+    with pytest.raises(InvalidInputError, match=r"expected --pixel-pitch from 0.1um to 10mm"):
+        get_workflow("sfr").make_options(pixel_pitch="1e30")
+    for ok in ("0.1um", "10mm", "139um", "3.76"):
+        assert get_workflow("sfr").make_options(pixel_pitch=ok).pitch_mm() is not None
 
 
 def test_sfr_pixel_pitch_on_the_command_line(

@@ -54,6 +54,15 @@ def test_simulate_lab_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     for sub in ("lab.toml", "emva.toml", "camera.toml", "checkerboard", "edge", "flats"):
         assert (lab / sub).exists(), sub
     assert read_camera(lab / "camera.toml").sensor == read_camera(path).sensor
+    # a lab set is a folder output: made again only with --force, then replaced whole (it
+    # was refused as "a folder; give a file name" even with --force)
+    (lab / "old.txt").write_text("a file of the previous set")
+    again = [*args[:-1], str(tmp_path / "sim2")]
+    assert main(again) == 1
+    assert f"output {lab} exists; pass --force" in capsys.readouterr().err
+    assert main([*again, "--force"]) == 0
+    capsys.readouterr()
+    assert (lab / "lab.toml").is_file() and not (lab / "old.txt").exists()
     # --lab without --camera, and a folder of someone's files, are refused
     assert main(["simulate", "--lab", str(tmp_path / "x"), "-o", str(tmp_path / "s2")]) == 2
     assert "give --camera FILE" in capsys.readouterr().err
@@ -62,4 +71,5 @@ def test_simulate_lab_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     (mine / "photo.png").write_bytes(b"")
     args = ["simulate", "--camera", str(path), "--lab", str(mine), "-o", str(tmp_path / "s3")]
     assert main([*args, "--force"]) == 1
+    assert "exists and is not a lab set (no lab.toml)" in capsys.readouterr().err
     assert (mine / "photo.png").exists()

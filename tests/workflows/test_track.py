@@ -192,6 +192,12 @@ def _base(tmp_path: Path, clip: tuple[Path, Path, list]) -> list[str]:
             "smaller than --square",
         ),
         (["--board", "9x6", "--square", "30mm", "--smooth", "1.5"], "--smooth"),
+        # not the writer's temporary file name ('.o.png.1234-ab.part.png') after tracking
+        (
+            ["--board", "9x6", "--square", "30mm", "--overlay", "o.png"],
+            "expected --overlay as a video file (.mp4, .m4v, .mov, .mkv, .avi), got 'o.png'",
+        ),
+        (["--board", "9x6", "--square", "30mm", "--fps", "1e300"], "expected --fps in (0, 10000)"),
     ],
 )
 def test_bad_options(
@@ -205,6 +211,13 @@ def test_bad_options(
     err = capsys.readouterr().err
     assert f"Error: {words}" in err or (words in err.splitlines()[-1]), err
     assert not (tmp_path / "p.csv").exists()
+
+
+def test_overlay_suffixes_are_the_writers() -> None:
+    from imageform.io.video import _CODECS
+    from imageform.workflows.track import OVERLAY_SUFFIXES
+
+    assert set(OVERLAY_SUFFIXES) == set(_CODECS)
 
 
 def test_bad_inputs(

@@ -127,7 +127,11 @@ def read_json(path: str | Path, kind: str) -> dict[str, Any]:
     if not p.is_file():
         raise InvalidInputError(f"{kind} file {p} does not exist")
     try:
-        data = json.loads(p.read_text())
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise InvalidInputError(
+            f"{p} is not a {kind!r} file: not text (the file is JSON, as imageform writes it)"
+        ) from None
     except json.JSONDecodeError as exc:
         raise InvalidInputError(f"{p} is not valid JSON: {exc}") from exc
     if not isinstance(data, dict) or data.get("kind") != kind:

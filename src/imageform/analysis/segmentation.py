@@ -97,7 +97,9 @@ def _disc(r: int, name: str) -> np.ndarray:
     return np.asarray(x * x + y * y <= r * r)
 
 
-def _pair(value: object, name: str, lo: float, hi: float, unit: str) -> tuple[float, float]:
+def _pair(
+    value: object, name: str, lo: float, hi: float, unit: str, cv_max: float | None = None
+) -> tuple[float, float]:
     try:
         n = len(value)  # type: ignore[arg-type]
     except TypeError:
@@ -109,8 +111,11 @@ def _pair(value: object, name: str, lo: float, hi: float, unit: str) -> tuple[fl
     a, b = (as_real(v, name) for v in value)  # type: ignore[attr-defined]
     for v in (a, b):
         if not (math.isfinite(v) and lo <= v <= hi):
+            # S and V of 30:255 are OpenCV's 8-bit codes, given without opencv_ranges
+            cv = cv_max is not None and all(lo <= x <= cv_max for x in (a, b))
+            hint = f"; OpenCV's 0 to {cv_max:g} codes with opencv_ranges=True" if cv else ""
             raise InvalidInputError(
-                f"expected {name} bounds in [{lo:g}, {hi:g}] ({unit}), got {describe(value)}"
+                f"expected {name} bounds in [{lo:g}, {hi:g}] ({unit}), got {describe(value)}{hint}"
             )
     return a, b
 
@@ -240,8 +245,8 @@ def segment_hsv(
         s = (LECTURE_OPENCV[1][0] / 255, LECTURE_OPENCV[1][1] / 255) if s is None else s
         v = (LECTURE_OPENCV[2][0] / 255, LECTURE_OPENCV[2][1] / 255) if v is None else v
         hh = _pair(h, "h", 0.0, 360.0, "degrees")
-        ss = _pair(s, "s", 0.0, 1.0, "unit range")
-        vv = _pair(v, "v", 0.0, 1.0, "unit range")
+        ss = _pair(s, "s", 0.0, 1.0, "unit range", 255.0)
+        vv = _pair(v, "v", 0.0, 1.0, "unit range", 255.0)
     for name, (a, b) in (("s", ss), ("v", vv)):
         if a > b:
             raise InvalidInputError(f"expected {name} low <= high, got {a:g} > {b:g}")

@@ -65,9 +65,29 @@ def _unwrap(tp: Any) -> tuple[Any, bool]:
     return tp, False
 
 
+class _PathValue(click.Path):
+    """A file name that is not one of the command's own flags.
+
+    ``--corners --plot p.png`` would otherwise write the corners to a file named ``--plot``
+    and take ``p.png`` for an input ("input file p.png does not exist"): a forgotten value.
+    """
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        if isinstance(value, str) and value.startswith("-") and ctx is not None:
+            flags = {
+                o
+                for p in ctx.command.params
+                if isinstance(p, click.Option)
+                for o in (*p.opts, *p.secondary_opts)
+            }
+            if value in flags | {"-h", "--help"}:
+                self.fail(f"a file name is missing: got the option {value} instead", param, ctx)
+        return super().convert(value, param, ctx)
+
+
 def _click_type(tp: Any) -> Any:
     if tp is Path:
-        return click.Path(path_type=Path, dir_okay=True)
+        return _PathValue(path_type=Path, dir_okay=True)
     return {int: click.INT, float: click.FLOAT, str: click.STRING}.get(tp, click.STRING)
 
 
@@ -337,7 +357,7 @@ def build_command(wf: Workflow) -> click.Command:
         params.append(
             click.Option(
                 ["-o", "--out", "out"],
-                type=click.Path(path_type=Path),
+                type=_PathValue(path_type=Path),
                 default=Path(wf.output.default) if wf.output.default else None,
                 show_default=wf.output.default is not None,
                 required=wf.output.required and wf.output.default is None,

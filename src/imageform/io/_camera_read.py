@@ -44,7 +44,13 @@ def parse(data: dict[str, Any], where: str) -> CameraFile:
 def _read_v1(data: dict[str, Any], r: Reader) -> CameraFile:
     fmt = data.get("format")
     if fmt != CAMERA_FILE_FORMAT:
-        raise r.fail("format", f"expected {CAMERA_FILE_FORMAT!r}, got {_show(fmt)}")
+        hint = (
+            " (a stereo camera file, as stereo-calibrate writes it: read_stereo_camera reads "
+            "it; each camera is one of its [left] and [right] tables)"
+            if fmt == "imageform-stereo"
+            else ""
+        )
+        raise r.fail("format", f"expected {CAMERA_FILE_FORMAT!r}, got {_show(fmt)}{hint}")
     if "version" not in data:
         raise r.fail("version", "missing (the format version, 1)")
     version = r.count(data["version"], "version", minimum=1)

@@ -119,6 +119,9 @@ IMAGE_FORMATS = MappingProxyType(
     }
 )
 
+#: The formats :func:`write_image` writes (the others of IMAGE_FORMATS are read only).
+_WRITTEN = ("png", "jpeg", "tiff", "npy")
+
 #: Default limit on the pixels of an image read into memory (10000 x 10000); larger images
 #: go through ``imageform chunked``, or raise the limit with ``IMAGEFORM_MAX_PIXELS``.
 DEFAULT_MAX_PIXELS = 100_000_000
@@ -191,9 +194,11 @@ def image_format(path: str | Path) -> str:
     suffix = p.suffix.lower()
     if suffix not in IMAGE_FORMATS:
         valid = ", ".join(IMAGE_FORMATS)
+        written = ", ".join(s for s, f in IMAGE_FORMATS.items() if f in _WRITTEN)
         shown = shorten(p)
         raise InvalidInputError(
-            f"unknown image file type {suffix[:20]!r} of {shown}; valid: {valid}"
+            f"unknown image file type {suffix[:20]!r} of {shown}; imageform reads {valid} "
+            f"and writes {written}"
         )
     return IMAGE_FORMATS[suffix]
 
@@ -1284,7 +1289,7 @@ def write_image(
         )
     if a.dtype.kind not in "fu" or a.dtype.itemsize > 8:
         raise InvalidInputError(f"expected floats, uint8 or uint16 to write {p}, got {a.dtype}")
-    if fmt in ("heif", "webp", "bmp", "gif", "dicom"):
+    if fmt not in _WRITTEN:
         name = {"heif": "HEIF", "webp": "WebP"}.get(fmt, fmt.upper())
         raise InvalidInputError(
             f"imageform reads {name} but does not write it; write a .png, .jpg or .tif file"

@@ -253,14 +253,24 @@ def read_stereo_camera(path: str | Path) -> StereoCameraFile:
         raise InvalidInputError(f"stereo camera file {p} does not exist")
     try:
         data: dict[str, Any] = tomllib.loads(p.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as exc:
+    except UnicodeDecodeError:
+        raise InvalidInputError(
+            f"{p} is not a stereo camera file: not text (the file is TOML, as "
+            "imageform stereo-calibrate writes it)"
+        ) from None
+    except OSError as exc:
         raise InvalidInputError(f"cannot read stereo camera file {p}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise InvalidInputError(f"{p}: not valid TOML: {exc}") from None
     r = Reader(str(p))
     fmt = data.get("format")
     if fmt != STEREO_FILE_FORMAT:
-        hint = " (a single-camera file: use read_camera)" if fmt == CAMERA_FILE_FORMAT else ""
+        hint = (
+            " (a single camera's file, as calibrate writes; a stereo camera file is written by "
+            "imageform stereo-calibrate, or stereo_calibrate and write_stereo_camera)"
+            if fmt == CAMERA_FILE_FORMAT
+            else ""
+        )
         raise r.fail("format", f"expected {STEREO_FILE_FORMAT!r}, got {fmt!r}{hint}")
     if "version" not in data:
         raise r.fail("version", "missing (the format version, 1)")

@@ -14,6 +14,7 @@ from typing import Any
 from imageform._files import Outputs, not_a_regular_file
 from imageform.errors import InvalidInputError
 from imageform.workflows._spec import (
+    IMAGE_SUFFIXES,
     Options,
     Result,
     Run,
@@ -67,6 +68,52 @@ def _note_of(w: warnings.WarningMessage) -> str:
     return "warning: " + (text[0] if text else w.category.__name__)
 
 
+def _check_data_suffix(wf: Workflow, out: Path) -> None:
+    """Refuse a main output of a data file (camera file, table, JSON) under another kind's name.
+
+    ``calibrate -o cam.json`` or ``emva -o e.png`` would write TOML or JSON there, ``gamut -o
+    g.txt`` failed in matplotlib. For workflows whose ``suffixes`` name a file that is not an
+    image (the image writers refuse a wrong suffix themselves), before anything is read.
+    """
+    if not set(wf.suffixes) - set(IMAGE_SUFFIXES):
+        return
+    if out.suffix.lower() not in wf.suffixes:
+        kinds = " or ".join(wf.suffixes)
+        raise InvalidInputError(
+            f"{wf.name} writes a {kinds} file: give -o a {kinds} name, not {out.name!r}"
+        )
+
+
+#: Names of files, never of the folder a folder output (simulate, reconstruct...) writes.
+_FILE_SUFFIXES = frozenset(
+    (*IMAGE_SUFFIXES, ".ply", ".csv", ".json", ".html", ".toml", ".dng", ".mp4", ".txt")
+)
+
+
+def _check_folder_name(wf: Workflow, out: Path) -> None:
+    """Refuse ``reconstruct -o room.ply``: the command writes a folder, which would be named so."""
+    if wf.output is None or not wf.output.folder or out.is_dir():
+        return
+    if out.suffix.lower() in _FILE_SUFFIXES:
+        holds = wf.output.help.partition(": ")[2].split(" (replaced")[0].split("; replaced")[0]
+        raise InvalidInputError(
+            f"{wf.name} writes a folder ({holds}): give -o a folder name, not the file name "
+            f"{out.name!r}"
+        )
+
+
+def _check_jpeg_depth(opts: Options, out: Path) -> None:
+    """Refuse ``-o x.jpg --bit-depth 16`` before the work.
+
+    The writer's message named its temporary file, after the work.
+    """
+    if getattr(opts, "bit_depth", None) == 16 and out.suffix.lower() in (".jpg", ".jpeg"):
+        raise InvalidInputError(
+            f"JPEG holds 8 bits per sample: give -o {out.stem}.png or {out.stem}.tif for "
+            "--bit-depth 16"
+        )
+
+
 def execute(
     workflow: Workflow | str,
     *,
@@ -117,6 +164,8 @@ def execute(
     wf = get_workflow(workflow) if isinstance(workflow, str) else workflow
     if out is not None:
         out = as_path(out, "out (-o/--out)")
+        _check_data_suffix(wf, Path(out))
+        _check_folder_name(wf, Path(out))
     force = as_bool(force, "force")
     if progress is not None and not callable(progress):
         raise InvalidInputError(f"expected progress as a callable, got {describe(progress)}")
@@ -125,6 +174,8 @@ def execute(
         raise InvalidInputError(
             f"expected options as {wf.options.__name__} for {wf.name}, got {type(opts).__name__}"
         )
+    if out is not None:
+        _check_jpeg_depth(opts, Path(out))
     names = {i.name for i in wf.inputs}
     if set(inputs) != names:
         raise InvalidInputError(
@@ -159,8 +210,13 @@ def execute(
             run = Run(outputs, progress=progress, gathered=frozenset(gathered))
             if out is not None:  # checked before any work starts
                 (run.folder if wf.output is not None and wf.output.folder else run.file)(out)
-            for extra in opts.paths("output"):
-                run.file(extra)
+            folders = {
+                Path(v)
+                for f in opts.fields()
+                if f.metadata.get("folder") and (v := getattr(opts, f.name)) is not None
+            }
+            for extra in opts.paths("output"):  # a folder option (simulate --lab) is one
+                (run.folder if extra in folders else run.file)(extra)
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("ignore", DeprecationWarning)
                 warnings.simplefilter("ignore", PendingDeprecationWarning)

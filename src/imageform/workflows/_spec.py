@@ -29,6 +29,7 @@ __all__ = [
     "Result",
     "Run",
     "Workflow",
+    "check_suffix",
     "choice_names",
     "flag_of",
     "normalize_choice",
@@ -52,6 +53,7 @@ def option(
     metavar: str | None = None,
     hidden: bool = False,
     output: bool = False,
+    folder: bool = False,
     input: bool = False,
     minimum: float | None = None,
     maximum: float | None = None,
@@ -78,6 +80,9 @@ def option(
     output, input : bool
         The field is a path the workflow writes (checked and written all or nothing with the
         main output) or reads (never overwritten by an output).
+    folder : bool
+        With ``output``: the path is a folder the workflow fills (``--force`` replaces it
+        whole), not a file.
     minimum, maximum : float, optional
         Bounds of a number (an ``int`` or ``float`` field), checked when the options are made;
         an ``int`` field without ``maximum`` is at most ``2**62``.
@@ -90,6 +95,7 @@ def option(
         "metavar": metavar,
         "hidden": hidden,
         "output": output,
+        "folder": folder,
         "input": input,
         "minimum": minimum,
         "maximum": maximum,
@@ -407,6 +413,12 @@ class Run:
         """Add a one-line note for the user (stderr); a note already given is not repeated."""
         if text not in self.notes:
             self.notes.append(text)
+
+
+def check_suffix(path: Path | None, suffix: str, flag: str, what: str) -> None:
+    """Refuse an output ``path`` of ``flag`` that does not end in ``suffix`` (JSON in a .png)."""
+    if path is not None and path.suffix.lower() != suffix:
+        raise InvalidInputError(f"{flag} writes {what}: give a {suffix} name, not {path.name!r}")
 
 
 def refuse_foreign_folder(

@@ -12,6 +12,7 @@ cropped to the chart or be photographs with a ColorChecker anywhere in them
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal, get_args
@@ -30,7 +31,7 @@ from imageform.workflows._images import (
     refuse_unscaled_floats,
     write,
 )
-from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
+from imageform.workflows._spec import Input, Output, Result, Run, Workflow, check_suffix, option
 from imageform.workflows.chart import CorrectionMethod
 
 __all__ = [
@@ -101,11 +102,20 @@ class SegmentOptions(ImageIn, RgbFrom):
 
     h: str | None = option(
         None,
-        help="Hue range LOW:HIGH in degrees (LOW > HIGH wraps); default 0:40.",
+        help="Hue range LOW:HIGH in degrees, 0-360 (OpenCV's 0-180 with --opencv-ranges; "
+        "LOW > HIGH wraps); default 0:40.",
         metavar="LO:HI",
     )
-    s: str | None = option(None, help="Saturation LOW:HIGH; default 30/255:1.", metavar="LO:HI")
-    v: str | None = option(None, help="Value LOW:HIGH; default 80/255:1.", metavar="LO:HI")
+    s: str | None = option(
+        None,
+        help="Saturation LOW:HIGH, 0-1 (OpenCV's 0-255 with --opencv-ranges); default 30/255:1.",
+        metavar="LO:HI",
+    )
+    v: str | None = option(
+        None,
+        help="Value LOW:HIGH, 0-1 (OpenCV's 0-255 with --opencv-ranges); default 80/255:1.",
+        metavar="LO:HI",
+    )
     opencv_ranges: bool = option(
         False, help="Read --h in 0-180 and --s/--v in 0-255 (OpenCV's units)."
     )
@@ -135,16 +145,20 @@ def segment(run: Run, opts: SegmentOptions, *, out: Path, image: Path) -> Result
     from imageform.io import write_image
 
     read_as, img, space = _srgb(run, image, opts, clip=True)
-    seg = segment_hsv(
-        img,
-        _range(opts.h, "--h"),
-        _range(opts.s, "--s"),
-        _range(opts.v, "--v"),
-        opencv_ranges=opts.opencv_ranges,
-        open_radius=opts.open_radius,
-        close_radius=opts.close_radius,
-        min_area=opts.min_area,
-    )
+    try:
+        seg = segment_hsv(
+            img,
+            _range(opts.h, "--h"),
+            _range(opts.s, "--s"),
+            _range(opts.v, "--v"),
+            opencv_ranges=opts.opencv_ranges,
+            open_radius=opts.open_radius,
+            close_radius=opts.close_radius,
+            min_area=opts.min_area,
+        )
+    except InvalidInputError as exc:  # the library's keywords as this command's flags
+        msg = re.sub(r"\bexpected ([hsv]) ", r"expected --\1 ", str(exc))
+        raise InvalidInputError(msg.replace("opencv_ranges=True", "--opencv-ranges")) from None
     write_image(run.file(out), np.where(seg.mask, np.uint8(255), np.uint8(0))[..., None])
     if opts.overlay is not None:
         write(run, opts.overlay, overlay_mask(img, seg.mask), opts, like=read_as)
@@ -203,6 +217,7 @@ class StainNormalizeOptions(ImageIn, ImageOut, RgbFrom):
         """Check the options and take ``target`` as a path."""
         super().check()
         object.__setattr__(self, "target", Path(self.target))
+        check_suffix(self.save_target, ".json", "--save-target", "the target's statistics (JSON)")
         if self.mask is not None:
             key = str(self.mask).strip().lower()
             object.__setattr__(self, "mask", key if key in _MASK_WORDS else str(self.mask))
@@ -241,7 +256,17 @@ def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
 
     if opts.target.suffix.lower() == ".json":
         kind = analysis.MacenkoStains if opts.method == "macenko" else analysis.ReinhardStats
-        return kind.from_json(opts.target)
+        try:
+            return kind.from_json(opts.target)
+        except InvalidInputError as exc:  # a target saved by the other method
+            saved = {"'macenko_stains'": "macenko", "'reinhard_stats'": "reinhard"}
+            other = next((m for k, m in saved.items() if str(exc).endswith(f"got kind {k}")), None)
+            if other is None or other == opts.method:
+                raise
+            raise InvalidInputError(
+                f"--target {opts.target} was saved by --method {other}: normalise with "
+                f"--method {other}, or give the reference image for --method {opts.method}"
+            ) from None
     ref = _srgb(run, opts.target, opts, clip=True)[1]
     mask = _stain_mask(opts, ref, target=True)
     if opts.method == "macenko":
@@ -487,6 +512,7 @@ class HarmonizeOptions(ImageIn, ImageOut, RgbFrom):
         super().check()
         if self.correction is not None and self.chart is not None:
             raise InvalidInputError("expected --correction FILE or --chart FILE, got both")
+        check_suffix(self.save_correction, ".json", "--save-correction", "the correction (JSON)")
         for name in ("correction", "chart", "reference"):
             v = getattr(self, name)
             if v is not None:

@@ -316,10 +316,21 @@ class _BoardChecks:
             )
 
     def square_mm(self) -> float:
-        """Return the square size in millimetres."""
+        """Return the square size in millimetres (0.1 um to 1000 m: beyond, the fit fails)."""
         from imageform._units import parse_length
 
-        return parse_length(self.square, "--square", default_unit="mm", unit="mm")
+        mm = parse_length(self.square, "--square", default_unit="mm", unit="mm")
+        if not SQUARE_MM[0] * (1 - 1e-9) <= mm <= SQUARE_MM[1] * (1 + 1e-9):
+            raise InvalidInputError(
+                f"expected --square from 0.1um to 1000m (a printed board: 2mm to 100mm), got "
+                f"{self.square}"
+            )
+        return mm
+
+
+#: The sizes of a square ``--square`` takes, in mm: calibrations of views of the same board with
+#: squares of 1e-12 mm to 1e9 mm agree to the printed digits; 1e-20 mm and 1e12 m do not converge.
+SQUARE_MM = (1e-4, 1e6)
 
 
 @contextmanager
@@ -333,6 +344,9 @@ def _converging(max_iter: int) -> Iterator[None]:
 
 
 # ---------------------------------------------------------------- calibrate
+
+#: The figure files ``--plot`` writes.
+_PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -361,7 +375,7 @@ class CalibrateOptions(_BoardChecks, ImageIn):
         output=True,
     )
     half_window: int | None = option(
-        None, help="Sub-pixel window half size (OpenCV's tutorial: 11); default adaptive."
+        None, help="Sub-pixel window half size in pixels (OpenCV's tutorial: 11); default adaptive."
     )
     refinement: Refinement = option("symmetric", help=REFINEMENT_HELP, choices=get_args(Refinement))
     partial: bool = option(
@@ -416,6 +430,10 @@ class CalibrateOptions(_BoardChecks, ImageIn):
     def check(self) -> None:
         """Check the board; a ChArUco board needs a ``--marker`` smaller than ``--square``."""
         super().check()
+        if self.plot is not None and self.plot.suffix.lower() not in _PLOT_SUFFIXES:
+            raise InvalidInputError(
+                f"expected --plot as a .png, .svg or .pdf file, got {self.plot.name!r}"
+            )
         charuco = parse_charuco(self.board)
         if charuco is not None and self.partial:
             raise InvalidInputError(

@@ -25,7 +25,7 @@ from typing import Any, Literal, get_args
 
 from imageform.errors import InvalidInputError
 from imageform.workflows._images import ImageIn, patches_in_srgb, read
-from imageform.workflows._spec import Input, Output, Result, Run, Workflow, option
+from imageform.workflows._spec import Input, Output, Result, Run, Workflow, check_suffix, option
 
 __all__ = ["WORKFLOWS", "ChartOptions"]
 
@@ -78,6 +78,8 @@ class ChartOptions(ImageIn):
         from imageform.workflows._images import rgb_space_or_auto
 
         super().check()
+        check_suffix(self.csv, ".csv", "--csv", "the patch table (CSV)")
+        check_suffix(self.correction, ".json", "--correction", "the correction (JSON)")
         as_int(self.degree, "--degree", minimum=1, maximum=3)
         as_int(self.max_size, "--max-size", minimum=64, maximum=100_000)
         as_real(self.min_score, "--min-score", minimum=-1.0, maximum=1.0)

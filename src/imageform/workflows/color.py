@@ -299,6 +299,8 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
         help="white-patch: percentile of each channel (0-100; default 99, max-rgb 100); "
         "grayness-index: percent of the pixels taken as grey (default 0.1); pca: percent "
         "of darkest and of brightest pixels (default 3.5).",
+        minimum=0,
+        maximum=100,
     )
     p: float = option(6.0, help="shades-of-gray / gray-edge: Minkowski norm p >= 1.")
     sigma: float = option(1.0, help="gray-edge, grayness-index: Gaussian scale in pixels.")
@@ -355,6 +357,11 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
     import numpy as np
 
     refuse_absent_device(opts)  # before any file is read
+    if opts.method == "manual" and (opts.illuminant is None) == (opts.cct is None):
+        raise InvalidInputError(  # the library's words are its keywords, illuminant= and cct=
+            "--method manual takes one of --cct KELVIN (e.g. 3200) or --illuminant NAME "
+            "(e.g. A, D50, F2)"
+        )
     img = read(image, opts)
     if img.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got {img.shape[-1]} channel(s)")

@@ -80,7 +80,7 @@ class FlatfieldOptions(ImageIn):
         minimum=0.0,
     )
     working_size: int = option(
-        128, help="Side of the square BaSiC fits at.", minimum=8, maximum=4096
+        128, help="Side of the square BaSiC fits at, in pixels.", minimum=8, maximum=4096
     )
     mask: str | None = option(
         None,

@@ -46,9 +46,9 @@ class ProjectOptions(Options):
     )
     fx: float | None = option(None, help="Without --camera: focal length in pixels (x), > 0.")
     fy: float | None = option(None, help="Focal length in pixels (y), > 0; default --fx.")
-    cx: float | None = option(None, help="Principal point column (default 0).")
-    cy: float | None = option(None, help="Principal point row (default 0).")
-    skew: float | None = option(None, help="Skew (default 0).")
+    cx: float | None = option(None, help="Principal point column in pixels (default 0).")
+    cy: float | None = option(None, help="Principal point row in pixels (default 0).")
+    skew: float | None = option(None, help="Skew, K[0, 1] in pixels (default 0).")
 
     def check(self) -> None:
         """Check that the camera is given as ``--camera FILE`` or as ``--fx ...``, not both."""
@@ -267,7 +267,7 @@ def pose(run: Run, opts: PoseOptions, *, out: Path | None, camera: Path, points:
 class TriangulateOptions(Options):
     """Options of ``imageform triangulate``."""
 
-    sigma: float = option(1.0, help="Pixel noise (standard deviation) for the uncertainties.")
+    sigma: float = option(1.0, help="Pixel noise (standard deviation, px) for the uncertainties.")
     views: str | None = option(
         None,
         help="With a table that has an image column (imageform calibrate --corners): the "

@@ -37,8 +37,8 @@ class SfrOptions(ImageIn):
 
     roi: str | None = option(
         None,
-        help="Region x,y,w,h (column, row of its top-left pixel, width, height) holding one "
-        "slanted edge; default: find the edges of a chart of dark squares.",
+        help="Region x,y,w,h in pixels (column, row of its top-left pixel, width, height) "
+        "holding one slanted edge; default: find the edges of a chart of dark squares.",
         metavar="X,Y,W,H",
     )
     transfer: _Transfer = option(
@@ -54,8 +54,12 @@ class SfrOptions(ImageIn):
         "line pairs per mm. Default: a DICOM's Imager Pixel Spacing (else Pixel Spacing).",
         metavar="LENGTH",
     )
-    min_angle: float = option(2.0, help="Smallest edge angle (deg) kept by the edge finder.")
-    max_angle: float = option(10.0, help="Largest edge angle (deg) kept by the edge finder.")
+    min_angle: float = option(
+        2.0, help="Smallest edge angle (deg) kept by the edge finder.", minimum=0, maximum=40
+    )
+    max_angle: float = option(
+        10.0, help="Largest edge angle (deg) kept by the edge finder.", minimum=0, maximum=40
+    )
 
     def region(self) -> tuple[int, int, int, int] | None:
         """Return the ``--roi`` as four integers, or None."""
@@ -78,11 +82,21 @@ class SfrOptions(ImageIn):
             return None
         from imageform._units import parse_length
 
-        return parse_length(self.pixel_pitch, "--pixel-pitch", default_unit="um", unit="mm")
+        mm = parse_length(self.pixel_pitch, "--pixel-pitch", default_unit="um", unit="mm")
+        if not 1e-4 * (1 - 1e-9) <= mm <= 10.0 * (1 + 1e-9):
+            raise InvalidInputError(
+                f"expected --pixel-pitch from 0.1um to 10mm (a camera's 1-10um, an X-ray "
+                f"detector's 50-200um), got {self.pixel_pitch}"
+            )
+        return mm
 
     def check(self) -> None:
         """Check the options, the ``--roi`` and the ``--pixel-pitch``."""
         super().check()
+        if self.min_angle > self.max_angle:
+            raise InvalidInputError(
+                f"expected --min-angle <= --max-angle, got {self.min_angle:g} > {self.max_angle:g}"
+            )
         self.region()
         self.pitch_mm()
 
@@ -175,6 +189,12 @@ def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
     arr, names, transfer, pitch = _edge_image(image, opts)
     roi = opts.region()
     if roi is not None:
+        h, w = arr.shape[:2]
+        x, y, rw, rh = roi
+        if x < 0 or y < 0 or x + rw > w or y + rh > h:
+            raise InvalidInputError(
+                f"expected --roi x,y,w,h inside the {w}x{h} image {image.name}, got {opts.roi}"
+            )
         regions = [(roi, "roi")]
     else:
         found = find_slanted_edges(arr, min_angle=opts.min_angle, max_angle=opts.max_angle)

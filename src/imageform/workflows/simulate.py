@@ -50,6 +50,7 @@ class SimulateOptions(Options):
         "checkerboard/, colorchecker/, edge/, flats/ and darks/ with emva.toml, lab.toml and "
         "the camera file (imageform.simulate.render_lab_set; docs/simulate.md).",
         output=True,
+        folder=True,
         metavar="FOLDER",
     )
     seed: int = option(

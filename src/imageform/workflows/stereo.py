@@ -71,7 +71,7 @@ class StereoCalibrateOptions(_BoardChecks, ImageIn):
     )
     skew: bool = option(False, help="Estimate the skew of both cameras (default: 0).")
     half_window: int | None = option(
-        None, help="Sub-pixel window half size (OpenCV's tutorial: 11); default adaptive."
+        None, help="Sub-pixel window half size in pixels (OpenCV's tutorial: 11); default adaptive."
     )
     refinement: Refinement = option("symmetric", help=REFINEMENT_HELP, choices=get_args(Refinement))
     model: Model = option(

@@ -66,6 +66,10 @@ def parse_track_board(text: str) -> tuple[str, tuple[int, int]]:
     return kind, (cols, rows)
 
 
+#: The video files ``--overlay`` writes (imageform.io.VideoWriter's containers).
+OVERLAY_SUFFIXES = (".mp4", ".m4v", ".mov", ".mkv", ".avi")
+
+
 @dataclass(frozen=True, kw_only=True)
 class TrackOptions(Options):
     """Options of ``imageform track``."""
@@ -110,7 +114,8 @@ class TrackOptions(Options):
         metavar="ALPHA",
     )
     fps: float | None = option(
-        None, help="Frame rate of an image sequence (default 30), or to ask a device for."
+        None,
+        help="Frame rate (frames/s) of an image sequence (default 30), or to ask a device for.",
     )
     max_frames: int | None = option(
         None, help="Stop after this many frames (a device runs until Ctrl-C otherwise)."
@@ -152,6 +157,13 @@ class TrackOptions(Options):
             raise InvalidInputError("--marker is for a ChArUco --board charuco:COLSxROWS")
         if self.smooth is not None and not 0 < self.smooth < 1:
             raise InvalidInputError(f"expected --smooth in (0, 1), got {self.smooth:g}")
+        if self.overlay is not None and self.overlay.suffix.lower() not in OVERLAY_SUFFIXES:
+            raise InvalidInputError(
+                f"expected --overlay as a video file ({', '.join(OVERLAY_SUFFIXES)}), "
+                f"got {self.overlay.name!r}"
+            )
+        if self.fps is not None and not 0 < self.fps < 10_000:
+            raise InvalidInputError(f"expected --fps in (0, 10000) frames/s, got {self.fps:g}")
         if self.max_frames is not None and self.max_frames < 1:
             raise InvalidInputError(f"expected --max-frames >= 1, got {self.max_frames}")
 
