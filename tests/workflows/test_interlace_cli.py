@@ -109,8 +109,10 @@ def test_track_auto_leaves_a_progressive_clip_alone(
         out = tmp_path / f"{how}.csv"
         args = ["track", str(frames), "--camera", str(camera), *BOARD, "-o", str(out)]
         assert main([*args, "--deinterlace", how, "--json"]) == 0
-        summary = json.loads(capsys.readouterr().out)
+        captured = capsys.readouterr()
+        summary = json.loads(captured.out)
         assert summary["deinterlace"]["method"] == "off"
+        assert "progressive" not in captured.err  # an ordinary clip: nothing said
         outs[how] = out.read_text()
         if how == "auto":
             assert summary["deinterlace"]["found"]["interlaced"] is False
@@ -215,3 +217,25 @@ def test_reconstruct_bad_deinterlace_option(
     args = ["reconstruct", str(ENDO), "--camera", str(ENDO / "camera.toml")]
     assert main([*args, "--deinterlace", "bob", "-o", str(tmp_path / "rec")]) != 0
     assert "--deinterlace" in capsys.readouterr().err
+
+
+def test_the_note_speaks_only_when_there_is_something_to_say() -> None:
+    """deinterlace_note: nothing for a progressive clip (stream silent or progressive); a
+    note where the stream flags interlacing the frames do not show, or fields were taken."""
+    from types import SimpleNamespace
+
+    from imageform.io.interlace import Interlacing
+    from imageform.workflows._video import deinterlace_note
+
+    def reader(stream: str | None, interlaced: bool, method: str) -> SimpleNamespace:
+        found = Interlacing(interlaced, "top" if interlaced else None, 30,
+                            30 if interlaced else 0, 0, 0 if interlaced else 30, 0, 1.0,
+                            stream)  # fmt: skip
+        return SimpleNamespace(interlacing=found, deinterlaced=method, field_order="top")
+
+    assert deinterlace_note(reader(None, False, "off"), 25) == ""  # type: ignore[arg-type]
+    assert deinterlace_note(reader("progressive", False, "off"), 25) == ""  # type: ignore[arg-type]
+    flagged = deinterlace_note(reader("tt", False, "off"), 25)  # type: ignore[arg-type]
+    assert flagged.startswith("progressive (") and "the stream says tt" in flagged
+    fields = deinterlace_note(reader("tt", True, "fields"), 25)  # type: ignore[arg-type]
+    assert fields.endswith("tracking fields at 50 per second")

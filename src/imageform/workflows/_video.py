@@ -44,9 +44,16 @@ def deinterlace_summary(reader: VideoReader) -> dict[str, Any]:
 
 
 def deinterlace_note(reader: VideoReader, fps: float, what_is_done: str = "tracking") -> str:
-    """Say what the reader found and did about interlacing ("" when it did not look)."""
+    """Say what the reader found and did about interlacing.
+
+    "" when it did not look, and when it looked and found a progressive clip the stream
+    does not flag as interlaced (the ordinary clip: nothing to say; the summary keeps it).
+    """
     found = getattr(reader, "interlacing", None)
     if found is None:
+        return ""
+    flagged = found.stream is not None and found.stream != "progressive"
+    if reader.deinterlaced == "off" and not found.interlaced and not flagged:
         return ""
     what = found.describe()
     method = reader.deinterlaced
