@@ -861,13 +861,21 @@ def test_warp_kernel_runs_are_the_pixel_by_pixel_values() -> None:
             assert lengths.max() >= 4 * _MIN_RUN and (lengths < _MIN_RUN).any()
 
 
+@pytest.mark.parametrize("band", [64, 8, 2])
 @pytest.mark.parametrize("case", ["warp", "vignette, warp", "per-plane warp", "malvar", "linear"])
-def test_develop_warps_and_renders_in_one_pass(tmp_path: Path, case: str) -> None:
+def test_develop_warps_and_renders_in_one_pass(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, case: str, band: int
+) -> None:
     """An OpcodeList3 ending in a warp: develop's image, the warp and the render in one pass
-    (camera RGB never made), is bit for bit the image rendered from ``camera_rgb`` (the
-    opcodes applied by apply_stage3, then the render), and so are its 16 bits."""
+    (camera RGB never made; a Bayer mosaic demosaiced band by band of ``band`` output rows,
+    or whole where a band would read more than twice its rows: here with 2), is bit for bit
+    the image rendered from ``camera_rgb`` (the opcodes applied by apply_stage3, then the
+    render), and so are its 16 bits."""
+    import imageform.io._dng_opcodes as opcodes
+
+    monkeypatch.setattr(opcodes, "_WARP_BAND", band)
     rng = np.random.default_rng(9)
-    mosaic = rng.integers(100, 4000, (64, 300)).astype(np.uint16)
+    mosaic = rng.integers(100, 4000, (150, 300)).astype(np.uint16)
     coef = [[1.0, -0.06, 0.03, 0.0, 0.002, -0.001]]
     if case == "per-plane warp":
         coef = [[1.0, -0.06 + 0.01 * p, 0.03, 0.0, 0.002, -0.001] for p in range(3)]
@@ -875,8 +883,13 @@ def test_develop_warps_and_renders_in_one_pass(tmp_path: Path, case: str) -> Non
     if case == "vignette, warp":
         ops.insert(0, _vignette_op((0.3, -0.1, 0.02, 0.0, 0.0), (0.55, 0.45)))
     path = _dng(tmp_path / "w.dng", mosaic, lists={51022: _op_list(*ops)},
-                active_area=(1, 3, 64, 300))  # fmt: skip
+                active_area=(1, 3, 150, 300))  # fmt: skip
     raw = read_raw(path)
+    if case == "warp":  # bands of 64 and 8 rows read under twice their rows; of 2, more
+        op, (offset, area) = raw.metadata["opcodes_stage3"][0], raw.metadata["opcodes_area"]
+        coef, geometry = opcodes._warp_kernel_args(op, offset, area)
+        rows = opcodes._band_source_rows(coef, geometry, *raw.mosaic.shape)
+        assert band < rows and (rows <= 2 * band) == (band > 2)
     kwargs: dict[str, Any] = {"demosaic": "malvar"} if case == "malvar" else {}
     if case == "linear":
         kwargs["linear"] = True

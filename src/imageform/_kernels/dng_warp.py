@@ -8,6 +8,8 @@ floored to 1/32 pixel (its 32 weights worked out once), 4 x 4 taps with the edge
 repeated, the result clamped to [0, 1]. :func:`warp_render_rows` is the same warp with
 :func:`imageform._kernels.raw_develop.render_rows` done on each row as it is warped (the
 colour matrix, the clipping and the transfer function): one pass, no warped image kept.
+:func:`develop_warp_render_rows` is that from a Bayer mosaic, demosaiced band by band of
+output rows (the rows a band's warp reads), so that no demosaiced image is made either.
 
 Per output row (:func:`_warp_row`): the source positions of every column
 (:func:`_row_sources`, a loop without branches the compiler vectorises), their weights, then
@@ -29,9 +31,9 @@ import math
 import numpy as np
 
 from imageform._kernels.jit import njit
-from imageform._kernels.raw_develop import render_planar_row
+from imageform._kernels.raw_develop import MODE_PLANAR, develop_rows, render_planar_row
 
-__all__ = ["warp_render_rows", "warp_rows"]
+__all__ = ["develop_warp_render_rows", "warp_render_rows", "warp_rows"]
 
 
 @njit(nogil=True)
@@ -144,10 +146,11 @@ def _row_runs(tops, lefts, h, w, starts, inner):  # type: ignore[no-untyped-def]
 
 
 @njit(nogil=True)
-def _pixel_taps(flat, p0, p1, h, w, tops, lefts, wts, j0, j1, o):  # type: ignore[no-untyped-def]
+def _pixel_taps(flat, p0, p1, h, hs, row0, w, tops, lefts, wts, j0, j1, o):  # type: ignore[no-untyped-def]
     """Warp columns ``j0 .. j1 - 1`` of planes ``p0 .. p1 - 1`` pixel by pixel into ``o``.
 
-    ``flat``: the planar source (C, H, W), flat. Each pixel's 4 x 4 taps with the edge pixels
+    ``flat``: the planar source (C, ``hs``, W), flat, from the image's row ``row0`` (of
+    ``h``). Each pixel's 4 x 4 taps with the edge pixels
     repeated (its rows and columns clamped once for every plane), the sums in the order of
     :func:`_run_taps`: per tap row ``0 + w0 v0 + w1 v1 + w2 v2 + w3 v3``, then ``0 + a0 x0 +
     a1 x1 + a2 x2 + a3 x3``, clamped to [0, 1]. For the edges, and runs too short for the
@@ -162,14 +165,14 @@ def _pixel_taps(flat, p0, p1, h, w, tops, lefts, wts, j0, j1, o):  # type: ignor
         c1 = min(max(left + 1, 0), w - 1)
         c2 = min(max(left + 2, 0), w - 1)
         c3 = min(max(left + 3, 0), w - 1)
-        a0 = min(max(top, 0), h - 1)
-        a1 = min(max(top + 1, 0), h - 1)
-        a2 = min(max(top + 2, 0), h - 1)
-        a3 = min(max(top + 3, 0), h - 1)
+        a0 = min(max(top, 0), h - 1) - row0
+        a1 = min(max(top + 1, 0), h - 1) - row0
+        a2 = min(max(top + 2, 0), h - 1) - row0
+        a3 = min(max(top + 3, 0), h - 1) - row0
         u = np.uint64
         if p1 - p0 == 3:
-            hw = u(h * w)
-            b0 = u(p0 * h * w)
+            hw = u(hs * w)
+            b0 = u(p0 * hs * w)
             r0 = b0 + u(a0 * w)
             r1 = b0 + u(a1 * w)
             r2 = b0 + u(a2 * w)
@@ -242,7 +245,7 @@ def _pixel_taps(flat, p0, p1, h, w, tops, lefts, wts, j0, j1, o):  # type: ignor
             o[p0 + 2, j] = min(max(t2, 0.0), 1.0)
             continue
         for p in range(p0, p1):
-            base = u(p * h * w)
+            base = u(p * hs * w)
             r0 = base + u(a0 * w)
             r1 = base + u(a1 * w)
             r2 = base + u(a2 * w)
@@ -333,23 +336,26 @@ def _run_taps(n, flat, q, w, wflat, v, ww, oflat, r, planes, hw):  # type: ignor
 
 
 @njit(nogil=True)
-def _warp_row(i, src, coef, geometry, table, xs, buf, wts, starts, inner, o, runs):  # type: ignore[no-untyped-def]
+def _warp_row(i, src, coef, geometry, table, xs, buf, wts, starts, inner, o, runs, h, row0, known):  # type: ignore[no-untyped-def]
     """Warp output row ``i`` of every plane of ``src`` (C, H, W) into ``o`` (C, W) float32.
 
-    ``buf`` (4, W) int32: the first tap's rows and columns, the fractions' indices; ``runs``
+    ``src`` holds the image's rows ``row0 ..`` of its ``h`` (all: ``row0`` 0). ``buf`` (4,
+    W) int32: the first tap's rows and columns, the fractions' indices (``known``: already
+    there, for one row of ``coef``); ``runs``
     False: every column pixel by pixel (:func:`_pixel_taps`; the tests' reference). A run of
     columns (:func:`_row_runs`) inside the image, :data:`_MIN_RUN` long or more, plane by
     plane by the vectorised loop (:func:`_run_taps`); the others pixel by pixel.
     """
-    nc, h, w = src.shape
-    flat = src.reshape(nc * h * w)
+    nc, hs, w = src.shape
+    flat = src.reshape(nc * hs * w)
     wflat = wts.reshape(8 * w)
     oflat = o.reshape(nc * w)
     tops, lefts, krs, kcs = buf[0], buf[1], buf[2], buf[3]
     shared = coef.shape[0] == 1  # one set of positions for every plane
     for p in range(1 if shared else nc):
         if p < coef.shape[0]:  # this plane's positions (the last row: the other planes')
-            _row_sources(i, coef[p], xs, geometry, h, w, tops, lefts, krs, kcs)
+            if not known:
+                _row_sources(i, coef[p], xs, geometry, h, w, tops, lefts, krs, kcs)
             _row_weights(krs, kcs, table, wts, w)
             n = _row_runs(tops, lefts, h, w, starts, inner)
         p1 = nc if shared else p + 1
@@ -357,10 +363,10 @@ def _warp_row(i, src, coef, geometry, table, xs, buf, wts, starts, inner, o, run
             j0 = starts[r]
             j1 = starts[r + 1]
             if runs and inner[r] and j1 - j0 >= _MIN_RUN:
-                q = (p * h + tops[j0]) * w + lefts[j0]
-                _run_taps(j1 - j0, flat, q, w, wflat, j0, w, oflat, p * w + j0, p1 - p, h * w)
+                q = (p * hs + tops[j0] - row0) * w + lefts[j0]
+                _run_taps(j1 - j0, flat, q, w, wflat, j0, w, oflat, p * w + j0, p1 - p, hs * w)
             else:
-                _pixel_taps(flat, p, p1, h, w, tops, lefts, wts, j0, j1, o)
+                _pixel_taps(flat, p, p1, h, hs, row0, w, tops, lefts, wts, j0, j1, o)
 
 
 @njit(nogil=True)
@@ -373,7 +379,7 @@ def warp_rows(r0, r1, src, out, coef, geometry, runs=True):  # type: ignore[no-u
     height and width, the centre (row, column) and the radius ``R``. ``runs`` False: every
     pixel by the pixel-by-pixel loop (the same values).
     """
-    nc, _, w = src.shape
+    nc, h, w = src.shape
     table = _weight_table()
     xs = _columns(geometry, w)
     buf = np.empty((4, w), np.int32)
@@ -382,7 +388,7 @@ def warp_rows(r0, r1, src, out, coef, geometry, runs=True):  # type: ignore[no-u
     inner = np.empty(w, np.bool_)
     o = np.empty((nc, w), np.float32)
     for i in range(r0, r1):
-        _warp_row(i, src, coef, geometry, table, xs, buf, wts, starts, inner, o, runs)
+        _warp_row(i, src, coef, geometry, table, xs, buf, wts, starts, inner, o, runs, h, 0, False)
         oi = out[i]
         for p in range(nc):
             op = o[p]
@@ -398,7 +404,7 @@ def warp_render_rows(r0, r1, src, coef, geometry, m, lut, encode, out):  # type:
     warped rows (``m``, ``lut``, ``encode`` as there), the same values bit for bit as the
     warp followed by the render, without the warped image written and read again.
     """
-    nc, _, w = src.shape
+    nc, h, w = src.shape
     table = _weight_table()
     xs = _columns(geometry, w)
     buf = np.empty((4, w), np.int32)
@@ -408,8 +414,52 @@ def warp_render_rows(r0, r1, src, coef, geometry, m, lut, encode, out):  # type:
     o = np.empty((nc, w), np.float32)
     idx = np.empty((3, w), np.int32)
     for i in range(r0, r1):
-        _warp_row(i, src, coef, geometry, table, xs, buf, wts, starts, inner, o, True)
+        _warp_row(i, src, coef, geometry, table, xs, buf, wts, starts, inner, o, True, h, 0, False)
         render_planar_row(o[0], o[1], o[2], m, lut, encode, out[i], idx)
+
+
+@njit(nogil=True, error_model="numpy")
+def develop_warp_render_rows(r0, r1, mosaic, black, scale, ry, rx, coef, geo, m, lut, enc, n, out):  # type: ignore[no-untyped-def]
+    """:func:`warp_render_rows` straight from a Bayer mosaic, ``n`` output rows at a time.
+
+    For each band of output rows, the source rows its warp reads (one row of ``coef``) are
+    demosaiced into planes by :func:`imageform._kernels.raw_develop.develop_rows` (its
+    arguments ``mosaic`` .. ``rx``; ``geo`` and ``enc``: :func:`warp_render_rows`'
+    ``geometry`` and ``encode``), then the band is warped and rendered from them: the
+    same values, bit for bit, as the whole image demosaiced first, without it made (a
+    band's source rows stay in the cache; the rows two bands share are demosaiced twice).
+    """
+    h, w = mosaic.shape
+    table = _weight_table()
+    xs = _columns(geo, w)
+    bufs = np.empty((n, 4, w), np.int32)
+    wts = np.empty((8, w))
+    starts = np.empty(w + 1, np.int64)
+    inner = np.empty(w, np.bool_)
+    o = np.empty((3, w), np.float32)
+    idx = np.empty((3, w), np.int32)
+    no_u = np.empty((0, 0, 3), np.uint16)
+    k = coef[0]
+    for i0 in range(r0, r1, n):
+        i1 = min(i0 + n, r1)
+        lo = h
+        hi = -1
+        for i in range(i0, i1):  # the band's positions, and the source rows they read
+            b = bufs[i - i0]
+            _row_sources(i, k, xs, geo, h, w, b[0], b[1], b[2], b[3])
+            tops = b[0]
+            for j in range(w):
+                lo = min(lo, tops[j])
+                hi = max(hi, tops[j])
+        s0 = max(lo, 0)
+        s1 = min(hi + 3, h - 1)
+        planes = np.empty((3, s1 - s0 + 1, w), np.float32)
+        develop_rows(s0, s1 + 1, mosaic, black, scale, ry, rx, m, lut, enc, MODE_PLANAR,
+                     planes, no_u, s0)  # fmt: skip
+        for i in range(i0, i1):
+            _warp_row(i, planes, coef, geo, table, xs, bufs[i - i0], wts, starts, inner, o,
+                      True, h, s0, True)  # fmt: skip
+            render_planar_row(o[0], o[1], o[2], m, lut, enc, out[i], idx)
 
 
 @njit(nogil=True, error_model="numpy")

@@ -54,7 +54,7 @@ MODE_CAMERA, MODE_FLOAT, MODE_UINT16, MODE_PLANAR = 0, 1, 2, 3
 
 _ROWS_SIGNATURE = (
     "void(int64, int64, uint16[:, ::1], float32[:, ::1], float32[:, ::1], int64, int64, "
-    "float32[:, ::1], float32[::1], boolean, int64, float32[:, :, ::1], uint16[:, :, ::1])"
+    "float32[:, ::1], float32[::1], boolean, int64, float32[:, :, ::1], uint16[:, :, ::1], int64)"
 )
 
 
@@ -92,10 +92,13 @@ def _balance_row(mosaic, black, scale, i, buf):  # type: ignore[no-untyped-def]
 
 
 @njit(_ROWS_SIGNATURE, nogil=True, error_model="numpy")
-def develop_rows(r0, r1, mosaic, black, scale, ry, rx, m, lut, encode, mode, out_f, out_u):  # type: ignore[no-untyped-def]
+def develop_rows(r0, r1, mosaic, black, scale, ry, rx, m, lut, encode, mode, out_f, out_u, row0):  # type: ignore[no-untyped-def]
     """Develop rows ``r0 .. r1 - 1`` of ``mosaic`` into ``out_f`` or ``out_u`` (``mode``).
 
-    ``out_f`` (H, W, 3), or (3, H, W) for :data:`MODE_PLANAR`. ``black``, ``scale``: per
+    ``out_f`` (H, W, 3), or (3, H, W) for :data:`MODE_PLANAR`; row ``i`` of the mosaic
+    is written to row ``i - row0`` of ``out_f`` or ``out_u`` (0: the whole image; the DNG
+    warp's kernel demosaics bands of rows, :func:`imageform._kernels.dng_warp.
+    develop_warp_render_rows`). ``black``, ``scale``: per
     photosite of the 2x2 tile; red at ``(ry, rx)``; ``m``: camera RGB to the output's linear
     RGB; ``lut``: the transfer table (used when ``encode``).
     """
@@ -136,7 +139,7 @@ def develop_rows(r0, r1, mosaic, black, scale, ry, rx, m, lut, encode, mode, out
             own[j] = x if is_rb else half * s1h
             oth[j] = q * dg if is_rb else half * s1v
         if mode == 0:
-            o = out_f[i]
+            o = out_f[i - row0]
             for j in range(w):
                 o[j, 0] = rgb[0, j]
                 o[j, 1] = rgb[1, j]
@@ -144,7 +147,7 @@ def develop_rows(r0, r1, mosaic, black, scale, ry, rx, m, lut, encode, mode, out
             continue
         if mode == 3:
             for c in range(3):
-                out_f[c, i] = rgb[c]
+                out_f[c, i - row0] = rgb[c]
             continue
         # the matrix and the clipping, then (a second loop, of gathers) the table
         for j in range(w):
@@ -169,11 +172,11 @@ def develop_rows(r0, r1, mosaic, black, scale, ry, rx, m, lut, encode, mode, out
                 lo = lut[e]
                 lin[j] = lo + f * (lut[e + 1] - lo)
         if mode == 1:
-            of = out_f[i].reshape(3 * w)
+            of = out_f[i - row0].reshape(3 * w)
             for j in range(3 * w):
                 of[j] = lin[j]
         else:
-            ou = out_u[i].reshape(3 * w)
+            ou = out_u[i - row0].reshape(3 * w)
             for j in range(3 * w):
                 ou[j] = np.int32(lin[j] * top + half)
 

@@ -72,6 +72,7 @@ __all__ = [
     "parse_opcode_list",
     "read_opcodes",
     "render_warped",
+    "render_warped_mosaic",
     "stage2_name",
     "stage3_name",
     "vignette_gains",
@@ -665,6 +666,69 @@ def render_warped(
     lut = table if table is not None else np.zeros(2, np.float32)
     out = np.empty((h, w, 3), np.float32)
     run_tasks(warp_render_rows, h, planes, coef, geometry, render, lut, table is not None, out,
+              threads=None if h * w >= 1 << 16 else 1)  # fmt: skip
+    return out
+
+
+#: Output rows the warp renders from one band of demosaiced rows (render_warped_mosaic).
+_WARP_BAND = 64
+
+
+def _band_source_rows(coef: np.ndarray, geometry: np.ndarray, h: int, w: int) -> int:
+    """Return about the most source rows a band of :data:`_WARP_BAND` output rows reads.
+
+    From the positions of every 16th row (the warp is smooth) and the sampled rows just
+    before and after each band.
+    """
+    from imageform._kernels.dng_warp import _columns, _row_sources
+
+    step = min(16, _WARP_BAND)
+    xs = _columns(geometry, w)
+    buf = np.empty((4, w), np.int32)
+    rows = [*range(0, h, step), h - 1]
+    lows, highs = [], []
+    for i in rows:
+        _row_sources(i, coef[0], xs, geometry, h, w, buf[0], buf[1], buf[2], buf[3])
+        lows.append(int(buf[0].min()))
+        highs.append(int(buf[0].max()))
+    most = 0
+    for b in range(0, h, _WARP_BAND):
+        near = [k for k, i in enumerate(rows) if b - step < i < b + _WARP_BAND + step]
+        most = max(most, max(highs[k] for k in near) - min(lows[k] for k in near) + 4)
+    return most
+
+
+def render_warped_mosaic(
+    fused: tuple[np.ndarray, np.ndarray, np.ndarray, int, int],
+    op: WarpRectilinear,
+    render: np.ndarray,
+    table: np.ndarray | None,
+    *,
+    offset: tuple[int, int] = (0, 0),
+    shape: tuple[int, int] | None = None,
+) -> np.ndarray | None:
+    """Return :func:`render_warped` of a Bayer mosaic's camera RGB, demosaiced band by band.
+
+    ``fused``: the fused pass's mosaic, black and scale per photosite, red's row and column
+    (:func:`imageform._kernels.raw_develop.develop_rows`). The same values, bit for bit, as
+    the mosaic demosaiced whole, then warped and rendered, without the demosaiced image
+    made (:func:`imageform._kernels.dng_warp.develop_warp_render_rows`). None where the
+    warp's coefficients differ by plane or a band of rows would read more than twice its
+    rows (a strong warp: the bands would demosaic too much again).
+    """
+    from imageform._kernels.dng_warp import develop_warp_render_rows
+    from imageform._kernels.jit import run_tasks
+
+    mosaic, black, scale, ry, rx = fused
+    h, w = mosaic.shape
+    full = shape if shape is not None else (h + offset[0], w + offset[1])
+    coef, geometry = _warp_kernel_args(op, offset, full)
+    if coef.shape[0] != 1 or _band_source_rows(coef, geometry, h, w) > 2 * _WARP_BAND:
+        return None
+    lut = table if table is not None else np.zeros(2, np.float32)
+    out = np.empty((h, w, 3), np.float32)
+    run_tasks(develop_warp_render_rows, h, mosaic, black, scale, ry, rx, coef, geometry, render,
+              lut, table is not None, _WARP_BAND, out,
               threads=None if h * w >= 1 << 16 else 1)  # fmt: skip
     return out
 

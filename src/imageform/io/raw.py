@@ -1139,6 +1139,16 @@ class Development:
         # kept) or, for a warp, in the render's own pass; None: none, or applied
         self._stage3: tuple[tuple[Any, ...], tuple[int, int], Any] | None = None
 
+    def _pass_args(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:
+        """Return the fused pass's mosaic, black and scale per photosite, red's row, column."""
+        raw = self._raw
+        idx = np.array(_cfa_indices(str(raw.cfa_pattern))).reshape(2, 2)
+        black = np.asarray(raw.black_level, np.float64)
+        scale = (self.gains[idx] / (raw.white_level - black)).astype(np.float32)
+        red = str(raw.cfa_pattern).index("R")
+        mosaic = np.ascontiguousarray(raw.mosaic, dtype=np.uint16)
+        return mosaic, np.ascontiguousarray(black, dtype=np.float32), scale, red // 2, red % 2
+
     def _fused(self, mode: int) -> np.ndarray:
         """Run the fused pass over the mosaic (``mode``: camera RGB, float or uint16 output)."""
         from imageform._kernels.jit import run_tasks
@@ -1182,6 +1192,7 @@ class Development:
             mode,
             out_f,
             out_u,
+            0,
             threads=None if h * w >= _THREADS_MIN_PIXELS else 1,
         )
         return out_u if mode == MODE_UINT16 else out_f
@@ -1210,11 +1221,16 @@ class Development:
         bilinearly on the CPU demosaiced straight into the planes the warp reads. The same
         values, bit for bit, as the opcodes applied, then the render.
         """
-        from imageform.io._dng_opcodes import apply_stage3, render_warped
+        from imageform.io._dng_opcodes import apply_stage3, render_warped, render_warped_mosaic
 
         assert self._stage3 is not None
         ops, offset, area = self._stage3
         *before, warp = ops
+        if not before and self._camera_rgb is None and self._device == "cpu":
+            banded = render_warped_mosaic(self._pass_args(), warp, self._render, self._table,
+                                          offset=offset, shape=area)  # fmt: skip
+            if banded is not None:
+                return banded
         if before or self._camera_rgb is not None or self._device != "cpu":
             cam = self._demosaiced()
             if before:
