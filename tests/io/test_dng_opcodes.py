@@ -887,8 +887,8 @@ def test_develop_warps_and_renders_in_one_pass(
     raw = read_raw(path)
     if case == "warp":  # bands of 64 and 8 rows read under twice their rows; of 2, more
         op, (offset, area) = raw.metadata["opcodes_stage3"][0], raw.metadata["opcodes_area"]
-        coef, geometry = opcodes._warp_kernel_args(op, offset, area)
-        rows = opcodes._band_source_rows(coef, geometry, *raw.mosaic.shape)
+        k, geometry = opcodes._warp_kernel_args(op, offset, area)
+        rows = opcodes._band_source_rows(k, geometry, *raw.mosaic.shape)
         assert band < rows and (rows <= 2 * band) == (band > 2)
     kwargs: dict[str, Any] = {"demosaic": "malvar"} if case == "malvar" else {}
     if case == "linear":
