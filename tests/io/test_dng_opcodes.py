@@ -872,6 +872,7 @@ def test_develop_warps_and_renders_in_one_pass(
     the image rendered from ``camera_rgb`` (the opcodes applied by apply_stage3, then the
     render), and so are its 16 bits."""
     import imageform.io._dng_opcodes as opcodes
+    from imageform._kernels.dng_warp import band_source_rows
 
     monkeypatch.setattr(opcodes, "_WARP_BAND", band)
     rng = np.random.default_rng(9)
@@ -888,7 +889,7 @@ def test_develop_warps_and_renders_in_one_pass(
     if case == "warp":  # bands of 64 and 8 rows read under twice their rows; of 2, more
         op, (offset, area) = raw.metadata["opcodes_stage3"][0], raw.metadata["opcodes_area"]
         k, geometry = opcodes._warp_kernel_args(op, offset, area)
-        rows = opcodes._band_source_rows(k, geometry, *raw.mosaic.shape)
+        rows = band_source_rows(k, geometry, *raw.mosaic.shape, band)
         assert band < rows and (rows <= 2 * band) == (band > 2)
     kwargs: dict[str, Any] = {"demosaic": "malvar"} if case == "malvar" else {}
     if case == "linear":

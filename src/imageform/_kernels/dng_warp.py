@@ -33,7 +33,7 @@ import numpy as np
 from imageform._kernels.jit import njit
 from imageform._kernels.raw_develop import MODE_PLANAR, develop_rows, render_planar_row
 
-__all__ = ["develop_warp_render_rows", "warp_render_rows", "warp_rows"]
+__all__ = ["band_source_rows", "develop_warp_render_rows", "warp_render_rows", "warp_rows"]
 
 
 @njit(nogil=True)
@@ -460,6 +460,39 @@ def develop_warp_render_rows(r0, r1, mosaic, black, scale, ry, rx, coef, geo, m,
             _warp_row(i, planes, coef, geo, table, xs, bufs[i - i0], wts, starts, inner, o,
                       True, h, s0, True)  # fmt: skip
             render_planar_row(o[0], o[1], o[2], m, lut, enc, out[i], idx)
+
+
+@njit(nogil=True)
+def band_source_rows(coef, geometry, h, w, band):  # type: ignore[no-untyped-def]
+    """Return about the most source rows a band of ``band`` output rows reads.
+
+    For :func:`develop_warp_render_rows`' choice: from the positions of every 16th row (the
+    warp is smooth; every ``band``-th where less) and the sampled rows just before and after
+    each band, plus the taps' four rows.
+    """
+    step = min(16, band)
+    xs = _columns(geometry, w)
+    buf = np.empty((4, w), np.int32)
+    tops, lefts, krs, kcs = buf[0], buf[1], buf[2], buf[3]
+    n = (h - 1) // step + 2
+    rows = np.empty(n, np.int64)
+    lows = np.empty(n, np.int64)
+    highs = np.empty(n, np.int64)
+    for k in range(n):
+        rows[k] = min(k * step, h - 1)
+        _row_sources(rows[k], coef[0], xs, geometry, h, w, tops, lefts, krs, kcs)
+        lows[k] = tops.min()
+        highs[k] = tops.max()
+    most = 0
+    for b in range(0, h, band):
+        lo = h
+        hi = -h
+        for k in range(n):
+            if b - step < rows[k] < b + band + step:
+                lo = min(lo, lows[k])
+                hi = max(hi, highs[k])
+        most = max(most, hi - lo + 4)
+    return most
 
 
 @njit(nogil=True, error_model="numpy")

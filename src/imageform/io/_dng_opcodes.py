@@ -674,30 +674,6 @@ def render_warped(
 _WARP_BAND = 64
 
 
-def _band_source_rows(coef: np.ndarray, geometry: np.ndarray, h: int, w: int) -> int:
-    """Return about the most source rows a band of :data:`_WARP_BAND` output rows reads.
-
-    From the positions of every 16th row (the warp is smooth) and the sampled rows just
-    before and after each band.
-    """
-    from imageform._kernels.dng_warp import _columns, _row_sources
-
-    step = min(16, _WARP_BAND)
-    xs = _columns(geometry, w)
-    buf = np.empty((4, w), np.int32)
-    rows = [*range(0, h, step), h - 1]
-    lows, highs = [], []
-    for i in rows:
-        _row_sources(i, coef[0], xs, geometry, h, w, buf[0], buf[1], buf[2], buf[3])
-        lows.append(int(buf[0].min()))
-        highs.append(int(buf[0].max()))
-    most = 0
-    for b in range(0, h, _WARP_BAND):
-        near = [k for k, i in enumerate(rows) if b - step < i < b + _WARP_BAND + step]
-        most = max(most, max(highs[k] for k in near) - min(lows[k] for k in near) + 4)
-    return most
-
-
 def render_warped_mosaic(
     fused: tuple[np.ndarray, np.ndarray, np.ndarray, int, int],
     op: WarpRectilinear,
@@ -716,14 +692,14 @@ def render_warped_mosaic(
     warp's coefficients differ by plane or a band of rows would read more than twice its
     rows (a strong warp: the bands would demosaic too much again).
     """
-    from imageform._kernels.dng_warp import develop_warp_render_rows
+    from imageform._kernels.dng_warp import band_source_rows, develop_warp_render_rows
     from imageform._kernels.jit import run_tasks
 
     mosaic, black, scale, ry, rx = fused
     h, w = mosaic.shape
     full = shape if shape is not None else (h + offset[0], w + offset[1])
     coef, geometry = _warp_kernel_args(op, offset, full)
-    if coef.shape[0] != 1 or _band_source_rows(coef, geometry, h, w) > 2 * _WARP_BAND:
+    if coef.shape[0] != 1 or band_source_rows(coef, geometry, h, w, _WARP_BAND) > 2 * _WARP_BAND:
         return None
     lut = table if table is not None else np.zeros(2, np.float32)
     out = np.empty((h, w, 3), np.float32)
