@@ -49,7 +49,9 @@ brightness, 16 bits), medians of 5 interleaved runs, and their ratio. Last, for 
 imageform's own reader (tifffile, used without LibRaw or where LibRaw cannot decode)
 against LibRaw's mosaic. Then, for speed at a phone's size, a synthetic 12 Mpx DNG with a
 Pixel's opcode set (written to a temporary folder): read_raw + develop with and without its
-opcodes against LibRaw's postprocess.
+opcodes against LibRaw's postprocess, each in its own worker process, ``--samples`` (9)
+interleaved runs of each; ``--against SRC`` times another checkout's ``src`` (main's, say:
+``git archive main src | tar -x -C /tmp/main``) in the same interleaving.
 """
 
 from __future__ import annotations
@@ -366,52 +368,126 @@ def _phone_like(folder: Path, h: int = 3024, w: int = 4032) -> Path:
     return path
 
 
-def _phone_like_timing() -> str:
-    """The table of read_raw + develop on :func:`_phone_like` against LibRaw's postprocess."""
+def _worker(path: Path) -> None:
+    """Time developments of ``path`` as asked on stdin, one a line: ``on`` (read_raw +
+    develop with the opcodes), ``off`` (--no-opcodes) or ``libraw``; print the seconds,
+    elapsed and of CPU (the process's, every thread's).
+
+    Run in a subprocess by :func:`_phone_like_timing`, with the imageform of its
+    ``PYTHONPATH`` (this checkout's, or the one ``--against`` names).
+    """
+    import sys
+
+    runs = {"on": lambda: _ours(path), "off": lambda: _ours(path, False),
+            "libraw": lambda: _libraw(path)}  # fmt: skip
+    for run in runs.values():  # compiled, cached, warm
+        run()
+    print("ready", flush=True)
+    for line in sys.stdin:
+        t0, c0 = time.perf_counter(), time.process_time()
+        runs[line.strip()]()
+        print(time.perf_counter() - t0, time.process_time() - c0, flush=True)
+
+
+def _phone_like_timing(samples: int, against: Path | None, name: str) -> str:
+    """The table of read_raw + develop on :func:`_phone_like` against LibRaw's postprocess.
+
+    Each development in its own worker process (:func:`_worker`), the samples interleaved:
+    this checkout's with and without opcodes, LibRaw's, and, with ``against`` (another
+    checkout's ``src``, e.g. main's), that one's with the opcodes.
+    """
+    import subprocess
+    import sys
     import tempfile
 
+    import imageform
+
+    here = Path(imageform.__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[1]
+    sources = {"this": here} | ({"against": against} if against is not None else {})
+    loads: list[float] = []
     with tempfile.TemporaryDirectory() as tmp:
         path = _phone_like(Path(tmp))
-        _ours(path)
-        _libraw(path)
-        on: list[float] = []
-        off: list[float] = []
-        lib: list[float] = []
-        for _ in range(3):
-            for times, fn in ((on, lambda: _ours(path)), (off, lambda: _ours(path, False)),
-                              (lib, lambda: _libraw(path))):  # fmt: skip
-                t0 = time.perf_counter()
-                fn()
-                times.append(time.perf_counter() - t0)
-    a, b, c = (statistics.median(t) for t in (on, off, lib))
-    rows = [["read_raw + develop, opcodes applied", f"{a:.2f}", f"{a / c:.2f}x"],
-            ["read_raw + develop, --no-opcodes", f"{b:.2f}", f"{b / c:.2f}x"],
-            ["LibRaw postprocess (no opcodes)", f"{c:.2f}", "1.00x"]]  # fmt: skip
-    return (
+        workers = {}
+        for key, src in sources.items():
+            env = dict(os.environ, PYTHONPATH=f"{src}{os.pathsep}{root}")
+            workers[key] = subprocess.Popen(
+                [sys.executable, __file__, "--worker", str(path)], env=env, text=True,
+                stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+            )  # fmt: skip
+        for worker in workers.values():
+            assert worker.stdout is not None and worker.stdout.readline().strip() == "ready"
+        plan = [("this", "on"), ("this", "off"), ("this", "libraw")]
+        plan += [("against", "on")] if against is not None else []
+        times: dict[tuple[str, str], list[float]] = {step: [] for step in plan}
+        cpu: dict[tuple[str, str], list[float]] = {step: [] for step in plan}
+        for _ in range(samples):
+            for key, what in plan:
+                worker = workers[key]
+                assert worker.stdin is not None and worker.stdout is not None
+                worker.stdin.write(what + "\n")
+                worker.stdin.flush()
+                elapsed, used = worker.stdout.readline().split()
+                times[(key, what)].append(float(elapsed))
+                cpu[(key, what)].append(float(used))
+            loads.append(os.getloadavg()[0])
+        for worker in workers.values():
+            assert worker.stdin is not None
+            worker.stdin.close()
+            worker.wait()
+    med = {step: statistics.median(t) for step, t in times.items()}
+    med_cpu = {step: statistics.median(t) for step, t in cpu.items()}
+    lib, lib_cpu = med[("this", "libraw")], med_cpu[("this", "libraw")]
+    names = {("this", "on"): "read_raw + develop, opcodes applied",
+             ("this", "off"): "read_raw + develop, --no-opcodes",
+             ("this", "libraw"): "LibRaw postprocess (no opcodes)",
+             ("against", "on"): f"{name}: read_raw + develop, opcodes applied"}  # fmt: skip
+    rows = [[names[step], f"{med[step]:.3f}", f"{med[step] / lib:.2f}x", f"{med_cpu[step]:.3f}",
+             f"{med_cpu[step] / lib_cpu:.2f}x"] for step in plan]  # fmt: skip
+    columns = ["development", "seconds", "against LibRaw", "CPU seconds", "CPU against LibRaw"]
+    text = (
         "\nSynthetic 12 Mpx (4032 x 3024) DNG with a Pixel's opcode set (four per-photosite "
-        "GainMaps in OpcodeList2, a WarpRectilinear in OpcodeList3), medians of 3 interleaved "
-        "runs:\n\n" + markdown_table(["development", "seconds", "against LibRaw"], rows)
+        f"GainMaps in OpcodeList2, a WarpRectilinear in OpcodeList3), medians of {samples} "
+        "interleaved runs, each development in its own process (against LibRaw: its time "
+        "over LibRaw's, below 1 faster; CPU: the process's, every thread's):\n\n"
+        + markdown_table(columns, rows)
     )
+    if against is not None:
+        this, before = ("this", "on"), ("against", "on")
+        text += (
+            f"\nWith the opcodes, {name}'s time over this one's: "
+            f"{med[before] / med[this]:.2f}x (CPU {med_cpu[before] / med_cpu[this]:.2f}x).\n"
+        )
+    return text + f"\nLoad average during the runs: {min(loads):.1f} to {max(loads):.1f}.\n"
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("folder", type=Path)
+    parser.add_argument("folder", type=Path, nargs="?", default=None,
+                        help="the real raws (none: the synthetic DNG's timing alone)")  # fmt: skip
     parser.add_argument("--out", type=Path, default=None)
+    parser.add_argument("--samples", type=int, default=9,
+                        help="interleaved runs of each synthetic development")  # fmt: skip
+    parser.add_argument("--against", type=Path, default=None,
+                        help="another checkout's src folder, timed with this")  # fmt: skip
+    parser.add_argument("--against-name", default="main", help="its name in the table")
+    parser.add_argument("--worker", type=Path, default=None, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
-    files = sorted(p for p in args.folder.iterdir() if p.suffix.lower() in RAW_EXTENSIONS)
-    rows = []
-    for path in files:
-        rows.append(_check(path))
-    columns = ["file", "camera", "opcodes in the file", "read_raw did", "develop",
-               "brightness / preview", "corner / centre luminance", "corner shift px",
-               "ours / LibRaw time", "tifffile reader vs LibRaw"]  # fmt: skip
+    if args.worker is not None:
+        _worker(args.worker)
+        return
     text = header("Real DNG and raw files: opcodes, previews, speed")
-    text += f"\n{len(files)} files from {args.folder.name}/ (sources in the script).\n\n"
-    text += markdown_table(columns, rows)
-    if NOTES:
-        text += "\n" + "\n".join(f"- {n}" for n in NOTES) + "\n"
-    text += _phone_like_timing()
+    if args.folder is not None:
+        files = sorted(p for p in args.folder.iterdir() if p.suffix.lower() in RAW_EXTENSIONS)
+        rows = [_check(path) for path in files]
+        columns = ["file", "camera", "opcodes in the file", "read_raw did", "develop",
+                   "brightness / preview", "corner / centre luminance", "corner shift px",
+                   "ours / LibRaw time", "tifffile reader vs LibRaw"]  # fmt: skip
+        text += f"\n{len(files)} files from {args.folder.name}/ (sources in the script).\n\n"
+        text += markdown_table(columns, rows)
+        if NOTES:
+            text += "\n" + "\n".join(f"- {n}" for n in NOTES) + "\n"
+    text += _phone_like_timing(args.samples, args.against, args.against_name)
     text += f"\nLoad average at the end: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores.\n"
     print(text)
     if args.out is not None:

@@ -13,6 +13,7 @@ import importlib.util
 import struct
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -815,12 +816,94 @@ def test_warp_kernel_three_planes_in_one_pass_are_the_per_plane_values() -> None
     cy, cx, radius = _center_and_radius((0.45, 0.55), (43, 60))
     geometry = np.array([2.0, 1.0, 43.0, 60.0, cy, cx, radius])
     coef = np.array([[1.0, 0.15, -0.04, 0.01, 0.004, -0.003]])
+    planes = np.ascontiguousarray(np.moveaxis(img, -1, 0))  # the kernel's (C, H, W)
     fused = np.empty_like(img)
-    warp_rows(0, 41, img, fused, coef, geometry)
+    warp_rows(0, 41, planes, fused, coef, geometry)
     per_plane = np.empty_like(img)
-    warp_rows(0, 41, img, per_plane, np.repeat(coef, 3, axis=0), geometry)
+    warp_rows(0, 41, planes, per_plane, np.repeat(coef, 3, axis=0), geometry)
     np.testing.assert_array_equal(fused, per_plane)
     assert np.abs(fused - img).max() > 0.1
+
+
+def test_warp_kernel_runs_are_the_pixel_by_pixel_values() -> None:
+    """The vectorised loop over runs of columns (source blocks inside the image, a column
+    apart) gives, bit for bit, the pixel-by-pixel loop's values, for one set of coefficients
+    and one per plane, on rows that have long runs, short ones and clamped edge columns."""
+    from imageform._kernels.dng_warp import (
+        _MIN_RUN,
+        _columns,
+        _row_runs,
+        _row_sources,
+        warp_rows,
+    )
+    from imageform.io._dng_opcodes import _center_and_radius
+
+    h, w = 48, 300
+    planes = np.random.default_rng(8).uniform(0.0, 1.0, (3, h, w)).astype(np.float32)
+    cy, cx, radius = _center_and_radius((0.45, 0.55), (h + 2, w + 3))
+    geometry = np.array([1.0, 2.0, h + 2.0, w + 3.0, cy, cx, radius])
+    one = np.array([[1.0, -0.06, 0.03, 0.0, 0.002, -0.001]])
+    for coef in (one, one + np.array([[0.0], [0.01], [0.02]]) * [0, 1, 0, 0, 0, 0]):
+        runs = np.empty((h, w, 3), np.float32)
+        warp_rows(0, h, planes, runs, coef, geometry)
+        pixels = np.empty_like(runs)
+        warp_rows(0, h, planes, pixels, coef, geometry, False)
+        np.testing.assert_array_equal(runs, pixels)
+        assert np.abs(runs - np.moveaxis(planes, 0, -1)).max() > 0.05
+    buf = np.empty((4, w), np.int32)
+    starts, inner = np.empty(w + 1, np.int64), np.empty(w, np.bool_)
+    for i, edges in ((20, False), (0, True)):  # row 0 reads row -1: clamped
+        _row_sources(i, one[0], _columns(geometry, w), geometry, h, w, *buf)
+        n = _row_runs(buf[0], buf[1], h, w, starts, inner)
+        lengths = np.diff(starts[: n + 1])
+        assert inner[:n].all() != edges
+        if not edges:
+            assert lengths.max() >= 4 * _MIN_RUN and (lengths < _MIN_RUN).any()
+
+
+@pytest.mark.parametrize("band", [64, 8, 2])
+@pytest.mark.parametrize("case", ["warp", "vignette, warp", "per-plane warp", "malvar", "linear"])
+def test_develop_warps_and_renders_in_one_pass(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, case: str, band: int
+) -> None:
+    """An OpcodeList3 ending in a warp: develop's image, the warp and the render in one pass
+    (camera RGB never made; a Bayer mosaic demosaiced band by band of ``band`` output rows,
+    or whole where a band would read more than twice its rows: here with 2), is bit for bit
+    the image rendered from ``camera_rgb`` (the opcodes applied by apply_stage3, then the
+    render), and so are its 16 bits."""
+    import imageform.io._dng_opcodes as opcodes
+    from imageform._kernels.dng_warp import band_source_rows
+
+    monkeypatch.setattr(opcodes, "_WARP_BAND", band)
+    rng = np.random.default_rng(9)
+    mosaic = rng.integers(100, 4000, (150, 300)).astype(np.uint16)
+    coef = [[1.0, -0.06, 0.03, 0.0, 0.002, -0.001]]
+    if case == "per-plane warp":
+        coef = [[1.0, -0.06 + 0.01 * p, 0.03, 0.0, 0.002, -0.001] for p in range(3)]
+    ops = [_warp_op(coef, (0.45, 0.55))]
+    if case == "vignette, warp":
+        ops.insert(0, _vignette_op((0.3, -0.1, 0.02, 0.0, 0.0), (0.55, 0.45)))
+    path = _dng(tmp_path / "w.dng", mosaic, lists={51022: _op_list(*ops)},
+                active_area=(1, 3, 150, 300))  # fmt: skip
+    raw = read_raw(path)
+    if case == "warp":  # bands of 64 and 8 rows read under twice their rows; of 2, more
+        op, (offset, area) = raw.metadata["opcodes_stage3"][0], raw.metadata["opcodes_area"]
+        k, geometry = opcodes._warp_kernel_args(op, offset, area)
+        rows = band_source_rows(k, geometry, *raw.mosaic.shape, band)
+        assert band < rows and (rows <= 2 * band) == (band > 2)
+    kwargs: dict[str, Any] = {"demosaic": "malvar"} if case == "malvar" else {}
+    if case == "linear":
+        kwargs["linear"] = True
+    one_pass = develop(raw, **kwargs)
+    image = one_pass.image
+    if case != "malvar":
+        assert one_pass._camera_rgb is None  # no warped (nor demosaiced) image kept
+    stages = develop(raw, **kwargs)
+    camera = stages.camera_rgb  # the opcodes applied to camera RGB, then rendered from it
+    np.testing.assert_array_equal(image, stages.image)
+    np.testing.assert_array_equal(develop(raw, **kwargs).to_integer(16), stages.to_integer(16))
+    plain = develop(read_raw(path, opcodes=False), **kwargs)
+    assert np.abs(camera - plain.camera_rgb).max() > 0.05
 
 
 @pytest.mark.parametrize(("shape", "offset", "full"),

@@ -79,6 +79,38 @@ def test_fused_pass_equals_the_stages(pattern: str, shape: tuple[int, int], line
     np.testing.assert_array_equal(dev.image, ref)
 
 
+@pytest.mark.parametrize("pattern", ["RGGB", "GBRG"])
+def test_planar_camera_rgb_is_the_camera_rgb(pattern: str) -> None:
+    """The pass's planes (3, H, W) of camera RGB, the DNG warp's source, are camera RGB's."""
+    from imageform._kernels.raw_develop import MODE_PLANAR
+
+    dev = develop(_raw((17, 24), pattern))
+    planes = dev._fused(MODE_PLANAR)
+    assert planes.shape == (3, 17, 24) and planes.flags.c_contiguous
+    np.testing.assert_array_equal(np.moveaxis(planes, 0, -1), dev.camera_rgb)
+
+
+@pytest.mark.parametrize("encode", [False, True])
+def test_planar_row_render_is_the_render(encode: bool) -> None:
+    """render_planar_row (one row given as planes) gives render_rows' values bit for bit:
+    the same matrix, clipping, square root and table, in loops the compiler vectorises."""
+    from imageform._kernels.raw_develop import render_planar_row, render_rows
+    from imageform.io.raw import _transfer_table
+
+    rng = np.random.default_rng(4)
+    cam = rng.uniform(-0.1, 1.2, (5, 301, 3)).astype(np.float32)
+    m = (CM / CM.sum(axis=1, keepdims=True)).astype(np.float32)
+    lut = _transfer_table("srgb")
+    ref = np.empty_like(cam)
+    render_rows(0, 5, cam, m, lut, encode, ref)
+    out = np.empty_like(cam)
+    idx = np.empty((3, 301), np.int32)
+    for i in range(5):
+        planes = np.ascontiguousarray(np.moveaxis(cam[i], -1, 0))
+        render_planar_row(planes[0], planes[1], planes[2], m, lut, encode, out[i], idx)
+    np.testing.assert_array_equal(out, ref)
+
+
 @pytest.mark.parametrize("threads", [1, 2])
 def test_threads_give_the_same_values(threads: int) -> None:
     if threads > numba.config.NUMBA_NUM_THREADS:

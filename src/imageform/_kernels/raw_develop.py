@@ -7,11 +7,13 @@ r"""Numba kernels of raw development (:func:`imageform.io.develop`), float32.
   bilinear_numba`'s arithmetic, the mosaic mirrored about its edge pixels), the 3x3 matrix
   (camera RGB to the output space's linear RGB, adaptation included), clipping to [0, 1]
   and the transfer function from a table (below); written as float32, as uint16 rounded half
-  up, or, before the matrix, as the demosaiced camera RGB. The working set is three
+  up, or, before the matrix, as the demosaiced camera RGB (pixel by pixel, or as three
+  planes for the DNG warp's kernel). The working set is three
   white-balanced rows, one demosaiced row, one output row (about 220 kB at 6000 columns) and
   the 256 kB table: in the core's L2 cache; no full-size temporary is made.
 - :func:`render_rows`: demosaiced camera RGB to the encoded output in one pass (a linear raw,
-  which has no mosaic, and the other demosaicing methods).
+  which has no mosaic, and the other demosaicing methods); :func:`render_planar_row`, the
+  same for one row given as planes (the DNG warp renders each row it warps with it).
 - :func:`quantize`: a float image in [0, 1] to integers, rounded half up.
 
 The transfer table is sampled uniformly in :math:`\sqrt{x}` (65,537 entries, linear
@@ -34,9 +36,11 @@ __all__ = [
     "LUT_SIZE",
     "MODE_CAMERA",
     "MODE_FLOAT",
+    "MODE_PLANAR",
     "MODE_UINT16",
     "develop_rows",
     "quantize",
+    "render_planar_row",
     "render_rows",
 ]
 
@@ -44,12 +48,13 @@ __all__ = [
 LUT_SIZE = 65536
 
 #: :func:`develop_rows` outputs: demosaiced camera RGB (float32), the encoded output as
-#: float32, the encoded output as uint16.
-MODE_CAMERA, MODE_FLOAT, MODE_UINT16 = 0, 1, 2
+#: float32, the encoded output as uint16, demosaiced camera RGB as planes (3, H, W) float32
+#: (the warp's source: :func:`imageform._kernels.dng_warp.warp_render_rows`).
+MODE_CAMERA, MODE_FLOAT, MODE_UINT16, MODE_PLANAR = 0, 1, 2, 3
 
 _ROWS_SIGNATURE = (
     "void(int64, int64, uint16[:, ::1], float32[:, ::1], float32[:, ::1], int64, int64, "
-    "float32[:, ::1], float32[::1], boolean, int64, float32[:, :, ::1], uint16[:, :, ::1])"
+    "float32[:, ::1], float32[::1], boolean, int64, float32[:, :, ::1], uint16[:, :, ::1], int64)"
 )
 
 
@@ -87,11 +92,15 @@ def _balance_row(mosaic, black, scale, i, buf):  # type: ignore[no-untyped-def]
 
 
 @njit(_ROWS_SIGNATURE, nogil=True, error_model="numpy")
-def develop_rows(r0, r1, mosaic, black, scale, ry, rx, m, lut, encode, mode, out_f, out_u):  # type: ignore[no-untyped-def]
+def develop_rows(r0, r1, mosaic, black, scale, ry, rx, m, lut, encode, mode, out_f, out_u, row0):  # type: ignore[no-untyped-def]
     """Develop rows ``r0 .. r1 - 1`` of ``mosaic`` into ``out_f`` or ``out_u`` (``mode``).
 
-    ``black``, ``scale``: per photosite of the 2x2 tile; red at ``(ry, rx)``; ``m``: camera
-    RGB to the output's linear RGB; ``lut``: the transfer table (used when ``encode``).
+    ``out_f`` (H, W, 3), or (3, H, W) for :data:`MODE_PLANAR`; row ``i`` of the mosaic
+    is written to row ``i - row0`` of ``out_f`` or ``out_u`` (0: the whole image; the DNG
+    warp's kernel demosaics bands of rows, :func:`imageform._kernels.dng_warp.
+    develop_warp_render_rows`). ``black``, ``scale``: per
+    photosite of the 2x2 tile; red at ``(ry, rx)``; ``m``: camera RGB to the output's linear
+    RGB; ``lut``: the transfer table (used when ``encode``).
     """
     h, w = mosaic.shape
     bal = np.empty((3, w + 2), np.float32)  # the white-balanced rows, by row index % 3
@@ -130,11 +139,15 @@ def develop_rows(r0, r1, mosaic, black, scale, ry, rx, m, lut, encode, mode, out
             own[j] = x if is_rb else half * s1h
             oth[j] = q * dg if is_rb else half * s1v
         if mode == 0:
-            o = out_f[i]
+            o = out_f[i - row0]
             for j in range(w):
                 o[j, 0] = rgb[0, j]
                 o[j, 1] = rgb[1, j]
                 o[j, 2] = rgb[2, j]
+            continue
+        if mode == 3:
+            for c in range(3):
+                out_f[c, i - row0] = rgb[c]
             continue
         # the matrix and the clipping, then (a second loop, of gathers) the table
         for j in range(w):
@@ -159,11 +172,11 @@ def develop_rows(r0, r1, mosaic, black, scale, ry, rx, m, lut, encode, mode, out
                 lo = lut[e]
                 lin[j] = lo + f * (lut[e + 1] - lo)
         if mode == 1:
-            of = out_f[i].reshape(3 * w)
+            of = out_f[i - row0].reshape(3 * w)
             for j in range(3 * w):
                 of[j] = lin[j]
         else:
-            ou = out_u[i].reshape(3 * w)
+            ou = out_u[i - row0].reshape(3 * w)
             for j in range(3 * w):
                 ou[j] = np.int32(lin[j] * top + half)
 
@@ -211,6 +224,61 @@ def render_rows(r0, r1, cam, m, lut, encode, out):  # type: ignore[no-untyped-de
                     f = t - np.float32(e)
                     lo = lut[e]
                     o[j, k] = lo + f * (lut[e + 1] - lo)
+
+
+@njit(nogil=True, error_model="numpy")
+def render_planar_row(r, g, b, m, lut, encode, o, idx):  # type: ignore[no-untyped-def]
+    """:func:`render_rows` of one row given as three planes ``r``, ``g``, ``b`` (W,) into ``o``.
+
+    ``o`` (W, 3) float32; ``r``, ``g``, ``b`` are overwritten, ``idx`` (3, W) int32 is room
+    for the table's indices. The same arithmetic, in the same order, as :func:`render_rows`
+    (the same values bit for bit), in two loops: the matrix, the clipping, the square root,
+    the table's index and the fraction over the planes (contiguous: the compiler vectorises
+    it), then the table's gathers into ``o``, pixel by pixel. The warp's kernel
+    renders each row it warps with it (:func:`imageform._kernels.dng_warp.warp_render_rows`).
+    """
+    w = o.shape[0]
+    zero = np.float32(0)
+    one = np.float32(1)
+    nm1 = np.int32(lut.shape[0] - 2)
+    fn = np.float32(lut.shape[0] - 1)
+    m00, m01, m02 = m[0, 0], m[0, 1], m[0, 2]
+    m10, m11, m12 = m[1, 0], m[1, 1], m[1, 2]
+    m20, m21, m22 = m[2, 0], m[2, 1], m[2, 2]
+    if not encode:
+        for j in range(w):
+            x = r[j]
+            y = g[j]
+            z = b[j]
+            o[j, 0] = min(max(m00 * x + m01 * y + m02 * z, zero), one)
+            o[j, 1] = min(max(m10 * x + m11 * y + m12 * z, zero), one)
+            o[j, 2] = min(max(m20 * x + m21 * y + m22 * z, zero), one)
+        return
+    for j in range(w):  # the table's index and fraction too: only the gathers left
+        x = r[j]
+        y = g[j]
+        z = b[j]
+        v0 = min(max(m00 * x + m01 * y + m02 * z, zero), one)
+        v1 = min(max(m10 * x + m11 * y + m12 * z, zero), one)
+        v2 = min(max(m20 * x + m21 * y + m22 * z, zero), one)
+        t0 = np.float32(np.sqrt(v0) * fn)
+        t1 = np.float32(np.sqrt(v1) * fn)
+        t2 = np.float32(np.sqrt(v2) * fn)
+        e0 = min(np.int32(t0), nm1)
+        e1 = min(np.int32(t1), nm1)
+        e2 = min(np.int32(t2), nm1)
+        idx[0, j] = e0
+        idx[1, j] = e1
+        idx[2, j] = e2
+        r[j] = t0 - np.float32(e0)
+        g[j] = t1 - np.float32(e1)
+        b[j] = t2 - np.float32(e2)
+    for j in range(w):
+        for k in range(3):
+            e = idx[k, j]
+            f = r[j] if k == 0 else (g[j] if k == 1 else b[j])
+            lo = lut[e]
+            o[j, k] = lo + f * (lut[e + 1] - lo)
 
 
 @njit(error_model="numpy")

@@ -71,6 +71,8 @@ __all__ = [
     "lossy_dng_curves",
     "parse_opcode_list",
     "read_opcodes",
+    "render_warped",
+    "render_warped_mosaic",
     "stage2_name",
     "stage3_name",
     "vignette_gains",
@@ -598,12 +600,9 @@ def apply_stage3(
             from imageform._kernels.dng_warp import warp_rows
             from imageform._kernels.jit import run_tasks
 
-            cy, cx, radius = _center_and_radius(op.center, full)
-            geometry = np.array([dt, dl, full[0], full[1], cy, cx, radius], np.float64)
-            coef = np.ascontiguousarray(op.coefficients, np.float64)
-            if np.all(coef == coef[0]):
-                coef = coef[:1]
-            run_tasks(warp_rows, h, out, warped, coef, geometry,
+            coef, geometry = _warp_kernel_args(op, offset, full)
+            src = np.ascontiguousarray(np.moveaxis(out, -1, 0))  # the kernel's (C, H, W)
+            run_tasks(warp_rows, h, src, warped, coef, geometry,
                       threads=None if h * w >= 1 << 16 else 1)  # fmt: skip
             out = warped
             continue
@@ -621,6 +620,92 @@ def apply_stage3(
                     sub = bicubic_sample(out[..., plane : plane + 1], sr, sc)
                     warped[start : start + rows_per_chunk, :, plane] = sub[..., 0]
         out = warped
+    return out
+
+
+def _warp_kernel_args(
+    op: WarpRectilinear, offset: tuple[int, int], full: tuple[int, int]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return the coefficients and geometry the warp's kernel takes.
+
+    :func:`imageform._kernels.dng_warp.warp_rows`; the coefficients one row when every
+    plane's are equal.
+    """
+    cy, cx, radius = _center_and_radius(op.center, full)
+    geometry = np.array([offset[0], offset[1], full[0], full[1], cy, cx, radius], np.float64)
+    coef = np.ascontiguousarray(op.coefficients, np.float64)
+    if np.all(coef == coef[0]):
+        coef = coef[:1]
+    return coef, geometry
+
+
+def render_warped(
+    planes: np.ndarray,
+    op: WarpRectilinear,
+    render: np.ndarray,
+    table: np.ndarray | None,
+    *,
+    offset: tuple[int, int] = (0, 0),
+    shape: tuple[int, int] | None = None,
+) -> np.ndarray:
+    """Return camera RGB planes (3, H, W) warped by ``op`` and rendered, in one pass.
+
+    ``render`` (3, 3) float32 and ``table`` (the transfer table; None: linear) as
+    :func:`imageform._kernels.raw_develop.render_rows` takes them; ``offset`` and ``shape``
+    as for :func:`apply_stage3`. The same values, bit for bit, as :func:`apply_stage3` of
+    ``[op]`` on the (H, W, 3) image followed by the render, without the warped image made
+    (:func:`imageform._kernels.dng_warp.warp_render_rows`). (H, W, 3) float32 out.
+    """
+    from imageform._kernels.dng_warp import warp_render_rows
+    from imageform._kernels.jit import run_tasks
+
+    planes = np.ascontiguousarray(planes, dtype=np.float32)
+    _, h, w = planes.shape
+    full = shape if shape is not None else (h + offset[0], w + offset[1])
+    coef, geometry = _warp_kernel_args(op, offset, full)
+    lut = table if table is not None else np.zeros(2, np.float32)
+    out = np.empty((h, w, 3), np.float32)
+    run_tasks(warp_render_rows, h, planes, coef, geometry, render, lut, table is not None, out,
+              threads=None if h * w >= 1 << 16 else 1)  # fmt: skip
+    return out
+
+
+#: Output rows the warp renders from one band of demosaiced rows (render_warped_mosaic).
+_WARP_BAND = 64
+
+
+def render_warped_mosaic(
+    fused: tuple[np.ndarray, np.ndarray, np.ndarray, int, int],
+    op: WarpRectilinear,
+    render: np.ndarray,
+    table: np.ndarray | None,
+    *,
+    offset: tuple[int, int] = (0, 0),
+    shape: tuple[int, int] | None = None,
+) -> np.ndarray | None:
+    """Return :func:`render_warped` of a Bayer mosaic's camera RGB, demosaiced band by band.
+
+    ``fused``: the fused pass's mosaic, black and scale per photosite, red's row and column
+    (:func:`imageform._kernels.raw_develop.develop_rows`). The same values, bit for bit, as
+    the mosaic demosaiced whole, then warped and rendered, without the demosaiced image
+    made (:func:`imageform._kernels.dng_warp.develop_warp_render_rows`). None where the
+    warp's coefficients differ by plane or a band of rows would read more than twice its
+    rows (a strong warp: the bands would demosaic too much again).
+    """
+    from imageform._kernels.dng_warp import band_source_rows, develop_warp_render_rows
+    from imageform._kernels.jit import run_tasks
+
+    mosaic, black, scale, ry, rx = fused
+    h, w = mosaic.shape
+    full = shape if shape is not None else (h + offset[0], w + offset[1])
+    coef, geometry = _warp_kernel_args(op, offset, full)
+    if coef.shape[0] != 1 or band_source_rows(coef, geometry, h, w, _WARP_BAND) > 2 * _WARP_BAND:
+        return None
+    lut = table if table is not None else np.zeros(2, np.float32)
+    out = np.empty((h, w, 3), np.float32)
+    run_tasks(develop_warp_render_rows, h, mosaic, black, scale, ry, rx, coef, geometry, render,
+              lut, table is not None, _WARP_BAND, out,
+              threads=None if h * w >= 1 << 16 else 1)  # fmt: skip
     return out
 
 
@@ -824,7 +909,9 @@ def _gain_maps_kernel(
     grid = np.concatenate(grids) if grids else np.zeros(1)
     rows = np.concatenate(row_w, axis=1) if row_w else np.zeros((3, 1))
     cols = np.concatenate(col_w, axis=1) if col_w else np.zeros((3, 1))
-    blk = np.broadcast_to(np.asarray(black, np.float64), (h, w))
+    blk = np.asarray(black, np.float64)
+    rows_of = (h, w) if blk.ndim == 2 and blk.shape[0] == h else (1, w)  # per row, or one
+    blk = np.ascontiguousarray(np.broadcast_to(blk, rows_of))
     run_tasks(gain_map_rows, h, np.ascontiguousarray(mosaic, np.uint16), blk, float(white),
               table, grid, rows, cols, out, threads=None if h * w >= 1 << 16 else 1)  # fmt: skip
     return out

@@ -519,8 +519,11 @@ def _with_opcodes(raw: RawImage, found: Any) -> RawImage:
         meta["opcodes_skipped"] = [*meta["opcodes_skipped"], *names1]
     names = [stage2_name(op) for op in maps]
     if maps and fits and raw.metadata.get("xtrans") is None:
-        mosaic = apply_stage2(mosaic, _black_plane(raw), raw.white_level, maps,
-                              offset=offset, shape=area)  # fmt: skip
+        levels = np.asarray(raw.black_level, np.float64)
+        # one black level (the common case) passed as one: no plane of it made and read
+        one = bool(np.all(levels == levels.flat[0]))
+        black = np.asarray(levels.flat[0]) if one else _black_plane(raw)
+        mosaic = apply_stage2(mosaic, black, raw.white_level, maps, offset=offset, shape=area)
         meta["opcodes_applied"] = names.count("OpcodeList2:GainMap")
         meta["opcodes_applied_other"] = [
             *meta.get("opcodes_applied_other", []),
@@ -1134,11 +1137,25 @@ class Development:
         self.notes = notes
         self._device = device  # "cuda": the fused pass runs as one CUDA kernel
         self.brightness = 1.0  # auto_bright's factor on the linear output
+        # a DNG's OpcodeList3 opcodes to apply to the demosaiced camera RGB (the opcodes, the
+        # offset, the area: develop sets them), applied when camera RGB is first read (then
+        # kept) or, for a warp, in the render's own pass; None: none, or applied
+        self._stage3: tuple[tuple[Any, ...], tuple[int, int], Any] | None = None
+
+    def _pass_args(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:
+        """Return the fused pass's mosaic, black and scale per photosite, red's row, column."""
+        raw = self._raw
+        idx = np.array(_cfa_indices(str(raw.cfa_pattern))).reshape(2, 2)
+        black = np.asarray(raw.black_level, np.float64)
+        scale = (self.gains[idx] / (raw.white_level - black)).astype(np.float32)
+        red = str(raw.cfa_pattern).index("R")
+        mosaic = np.ascontiguousarray(raw.mosaic, dtype=np.uint16)
+        return mosaic, np.ascontiguousarray(black, dtype=np.float32), scale, red // 2, red % 2
 
     def _fused(self, mode: int) -> np.ndarray:
         """Run the fused pass over the mosaic (``mode``: camera RGB, float or uint16 output)."""
         from imageform._kernels.jit import run_tasks
-        from imageform._kernels.raw_develop import MODE_UINT16, develop_rows
+        from imageform._kernels.raw_develop import MODE_PLANAR, MODE_UINT16, develop_rows
 
         raw = self._raw
         h, w = raw.mosaic.shape
@@ -1160,7 +1177,7 @@ class Development:
                 self._table,
                 mode,
             )
-        shape = (h, w, 3)
+        shape = (3, h, w) if mode == MODE_PLANAR else (h, w, 3)
         out_f = np.empty(shape if mode != MODE_UINT16 else (0, 0, 3), np.float32)
         out_u = np.empty(shape if mode == MODE_UINT16 else (0, 0, 3), np.uint16)
         table = self._table if self._table is not None else np.zeros(2, np.float32)
@@ -1178,20 +1195,63 @@ class Development:
             mode,
             out_f,
             out_u,
+            0,
             threads=None if h * w >= _THREADS_MIN_PIXELS else 1,
         )
         return out_u if mode == MODE_UINT16 else out_f
 
-    def _sensor_camera_rgb(self) -> np.ndarray:
+    def _demosaiced(self) -> np.ndarray:
+        """Return the demosaiced camera RGB, before OpcodeList3 (sensor orientation)."""
         if self._camera_rgb is not None:
             return self._camera_rgb
         from imageform._kernels.raw_develop import MODE_CAMERA
 
         return self._fused(MODE_CAMERA)
 
+    def _sensor_camera_rgb(self) -> np.ndarray:
+        if self._stage3 is not None:  # applied once, then kept
+            from imageform.io._dng_opcodes import apply_stage3
+
+            ops, offset, area = self._stage3
+            self._camera_rgb = apply_stage3(self._demosaiced(), ops, offset=offset, shape=area)
+            self._stage3 = None
+        return self._demosaiced()
+
+    def _warped_image(self) -> np.ndarray:
+        """Return the image of OpcodeList3 ending in a warp: the warp and the render in one pass.
+
+        The opcodes before the warp applied to the camera RGB first; a Bayer mosaic developed
+        bilinearly on the CPU demosaiced straight into the planes the warp reads. The same
+        values, bit for bit, as the opcodes applied, then the render.
+        """
+        from imageform.io._dng_opcodes import apply_stage3, render_warped, render_warped_mosaic
+
+        assert self._stage3 is not None
+        ops, offset, area = self._stage3
+        *before, warp = ops
+        if not before and self._camera_rgb is None and self._device == "cpu":
+            banded = render_warped_mosaic(self._pass_args(), warp, self._render, self._table,
+                                          offset=offset, shape=area)  # fmt: skip
+            if banded is not None:
+                return banded
+        if before or self._camera_rgb is not None or self._device != "cpu":
+            cam = self._demosaiced()
+            if before:
+                cam = apply_stage3(cam, before, offset=offset, shape=area)
+            planes = np.moveaxis(cam, -1, 0)
+        else:
+            from imageform._kernels.raw_develop import MODE_PLANAR
+
+            planes = self._fused(MODE_PLANAR)
+        return render_warped(planes, warp, self._render, self._table, offset=offset, shape=area)
+
     def _sensor_image(self) -> np.ndarray:
         if self._image is None:
-            if self._camera_rgb is None:
+            from imageform.io._dng_opcodes import WarpRectilinear
+
+            if self._stage3 is not None and isinstance(self._stage3[0][-1], WarpRectilinear):
+                self._image = self._warped_image()
+            elif self._camera_rgb is None and self._stage3 is None:
                 from imageform._kernels.raw_develop import MODE_FLOAT
 
                 self._image = self._fused(MODE_FLOAT)
@@ -1199,7 +1259,7 @@ class Development:
                 from imageform._kernels.jit import run_tasks
                 from imageform._kernels.raw_develop import render_rows
 
-                cam = self._camera_rgb
+                cam = self._sensor_camera_rgb()
                 table = self._table if self._table is not None else np.zeros(2, np.float32)
                 image = np.empty(cam.shape, np.float32)
                 h, w = cam.shape[:2]
@@ -1282,7 +1342,8 @@ class Development:
         """
         if bit_depth not in (8, 16):
             raise InvalidInputError(f"expected bit_depth 8 or 16, got {describe(bit_depth)}")
-        if bit_depth == 16 and self._image is None and self._camera_rgb is None:
+        if (bit_depth == 16 and self._image is None and self._camera_rgb is None
+                and self._stage3 is None):  # fmt: skip
             from imageform._kernels.raw_develop import MODE_UINT16
 
             out = self._fused(MODE_UINT16)
@@ -1557,11 +1618,10 @@ def develop(
     )
     stage3 = raw.metadata.get("opcodes_stage3") or ()
     if stage3:  # OpcodeList3: on the demosaiced camera RGB, before the matrix (on the CPU)
-        from imageform.io._dng_opcodes import apply_stage3, stage3_name
+        from imageform.io._dng_opcodes import stage3_name
 
         offset, area = raw.metadata.get("opcodes_area") or ((0, 0), None)
-        dev._camera_rgb = apply_stage3(dev._sensor_camera_rgb(), stage3, offset=offset,
-                                       shape=area)  # fmt: skip
+        dev._stage3 = (tuple(stage3), offset, area)  # applied when first read
         names = ", ".join(dict.fromkeys(stage3_name(op) for op in stage3))
         where_run = " (on the CPU, after the GPU's demosaicing)" if on_gpu else ""
         dev.notes = (*dev.notes, f"applied the DNG's {names} after demosaicing{where_run}")
