@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from imageform.errors import InvalidInputError
+from imageform.errors import InvalidInputError, UnreadableFileError
 from imageform.io import develop, read_image, read_raw, write_dng
 
 rawpy = pytest.importorskip("rawpy")
@@ -850,7 +850,7 @@ def test_raw_read_as_zeros_from_under_a_bit_a_photosite_is_refused(
     import imageform.io.raw as raw_module
 
     test_truncated_dng_is_refused_not_read_black(tmp_path)
-    monkeypatch.setattr(raw_module, "_raw_data_end", lambda p: 0)  # as for a non-DNG file
+    monkeypatch.setattr(raw_module, "_page_data_end", lambda tf: 0)  # as for a non-DNG file
     cut = tmp_path / "cut.dng"
     message = rf"is truncated \({cut.stat().st_size} bytes for 6144 photosites, under one bit"
     with pytest.raises(InvalidInputError, match=message):
@@ -875,3 +875,23 @@ def test_uncompressed_dng_cut_in_transfer_is_refused_as_truncated(tmp_path: Path
     ):
         read_raw(cut)
     assert cut.read_bytes() == before  # the input is untouched
+
+
+def test_a_raw_cut_well_short_is_refused_before_libraw_speaks(
+    tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """A DNG cut by an interrupted copy (hundreds of kB of its data missing) is refused from
+    its header, before LibRaw is asked: LibRaw's own "Unexpected end of file" line no longer
+    precedes the one-line refusal on stderr; the file is untouched."""
+    pytest.importorskip("rawpy")
+    mosaic = np.random.default_rng(0).integers(0, 4096, (512, 768)).astype(np.uint16)
+    whole = write_dng(tmp_path / "whole.dng", mosaic, black_level=64, white_level=4095,
+                      color_matrix=CM)  # fmt: skip
+    cut = tmp_path / "cut.dng"
+    cut.write_bytes(whole.read_bytes()[: whole.stat().st_size // 2])
+    before = cut.read_bytes()
+    capfd.readouterr()
+    with pytest.raises(UnreadableFileError, match=r"cut\.dng: the file is truncated \(its raw"):
+        read_raw(cut)
+    assert capfd.readouterr().err == ""
+    assert cut.read_bytes() == before

@@ -317,31 +317,37 @@ class RawImage:
 _TIFF_MAGIC = (b"II*\x00", b"MM\x00*", b"II+\x00", b"MM\x00+")
 #: ``_raw_page_opcodes`` of a file with no opcode to apply.
 _NO_OPCODES: Any = ([], [], [], [], (0, 0), None, None, 0)
+#: Bytes a raw may lack of its image data's end before it is refused unread (more than this
+#: and 1 % of the data): fewer are left to LibRaw, which reads some files whose last strip's
+#: count runs past the end.
+_CUT_MARGIN = 65536
 
 
-def _dng_header(path: Path, *, opcodes: bool = True) -> tuple[dict[str, Any], Any]:
-    """Return a DNG's :func:`_colour_tags` (IFD 0) and :func:`_raw_page_opcodes`, in one read.
+def _dng_header(path: Path, *, opcodes: bool = True) -> tuple[dict[str, Any], Any, int]:
+    """Return a DNG's colour tags, opcodes and data's end, in one read.
 
-    ``({}, _NO_OPCODES)`` for a file that is not TIFF-based; ``opcodes=False`` reads the
-    colour tags only.
+    :func:`_colour_tags` (IFD 0), :func:`_raw_page_opcodes` and :func:`_page_data_end`;
+    ``({}, _NO_OPCODES, 0)`` for a file that is not TIFF-based; ``opcodes=False`` reads the
+    colour tags and the data's end only.
     """
     import tifffile
 
     try:
         with path.open("rb") as f:  # a DNG is a TIFF: RW2, ORF, ... are left alone (tifffile
             if f.read(4) not in _TIFF_MAGIC:  # would warn on their own magic numbers)
-                return {}, _NO_OPCODES
+                return {}, _NO_OPCODES, 0
         with tifffile.TiffFile(path) as tf:
             tags = tf.pages[0].tags  # type: ignore[union-attr]
             colour = _colour_tags(tags)
+            end = _page_data_end(tf)
             if not opcodes or _DNG_VERSION not in tags:
-                return colour, _NO_OPCODES
+                return colour, _NO_OPCODES, end
             try:
-                return colour, _raw_page_opcodes(tf)
+                return colour, _raw_page_opcodes(tf), end
             except Exception:  # an IFD tifffile cannot read: no opcodes
-                return colour, _NO_OPCODES
+                return colour, _NO_OPCODES, end
     except Exception:  # not a TIFF-based raw: nothing more to read
-        return {}, _NO_OPCODES
+        return {}, _NO_OPCODES, 0
 
 
 def _colour_tags(tags: Any) -> dict[str, Any]:
@@ -573,19 +579,28 @@ def _raw_page_opcodes(tf: Any) -> Any:
     return stage1, maps, stage3, skipped, (0, 0), None, None if linearized else (0, 0), decoded
 
 
-def _raw_data_end(p: Path) -> int:
-    """Return the byte where a DNG's raw image's last strip or tile ends; 0 for no DNG."""
-    import tifffile
+def _page_data_end(tf: Any) -> int:
+    """Return the byte where a DNG's raw image's last strip or tile ends (0: cannot say).
 
+    ``tf`` is the open TIFF; 0 where it has no raw page or its IFD cannot be read.
+    """
     try:
-        with tifffile.TiffFile(p) as tf:
-            page = _dng_raw_page(tf)
-            if page is None:
-                return 0
-            ends = np.asarray(page.dataoffsets, np.int64) + np.asarray(page.databytecounts)
-            return int(ends.max()) if ends.size else 0
-    except Exception:  # not a TIFF-based raw
+        page = _dng_raw_page(tf)
+        if page is None:
+            return 0
+        ends = np.asarray(page.dataoffsets, np.int64) + np.asarray(page.databytecounts)
+        return int(ends.max()) if ends.size else 0
+    except Exception:  # an IFD tifffile cannot read
         return 0
+
+
+def _truncated(p: Path, end: int, size: int) -> UnreadableFileError:
+    """Refuse a raw whose image data ends at byte ``end`` of a file of ``size`` bytes."""
+    return UnreadableFileError(
+        p,
+        f"the file is truncated (its raw image's data ends at byte {end}, the file has "
+        f"{size} bytes)",
+    )
 
 
 def _tag_bytes(value: Any) -> bytes:
@@ -618,6 +633,12 @@ def _read_raw(
         own = _read_dng(p, limit)
         if own is not None:
             return own, _dng_header(p, opcodes=opcodes)[1]
+    header = _dng_header(p, opcodes=opcodes)  # before LibRaw, read once
+    n_bytes = p.stat().st_size
+    if (end := header[2]) - n_bytes > max(_CUT_MARGIN, end // 100):
+        # cut off in transfer (an interrupted copy): said before LibRaw prints its own
+        # "Unexpected end of file" onto stderr; a few bytes short is left to LibRaw's reading
+        raise _truncated(p, end, n_bytes)
     rawpy = _rawpy()
     r = rawpy.RawPy()
     try:
@@ -634,13 +655,9 @@ def _read_raw(
         own = _read_dng(p, limit)
         if own is not None:
             own.metadata["libraw"] = type(exc).__name__
-            return own, _dng_header(p, opcodes=opcodes)[1]
-        if (end := _raw_data_end(p)) > (n_bytes := p.stat().st_size):  # cut off in transfer
-            raise UnreadableFileError(
-                p,
-                f"the file is truncated (its raw image's data ends at byte {end}, the file "
-                f"has {n_bytes} bytes)",
-            ) from None
+            return own, header[1]
+        if end > n_bytes:  # cut off in transfer
+            raise _truncated(p, end, n_bytes) from None
         raise UnreadableFileError(
             p, f"not a raw file LibRaw can read ({type(exc).__name__})"
         ) from None
@@ -707,12 +724,8 @@ def _read_raw(
         if own is not None and floats and own.mosaic.shape == mosaic.shape:
             mosaic, black, white = own.mosaic, own.black_level, own.white_level
             raw_type = "float"
-        elif (end := _raw_data_end(p)) > (size := p.stat().st_size):  # LibRaw reads zeros
-            raise UnreadableFileError(
-                p,
-                f"the file is truncated (its raw image's data ends at byte {end}, the file "
-                f"has {size} bytes)",
-            )
+        elif end > n_bytes:  # LibRaw reads zeros
+            raise _truncated(p, end, n_bytes)
     photosites = mosaic.shape[0] * mosaic.shape[1]
     if (size := p.stat().st_size) * 8 < photosites and np.count_nonzero(mosaic) < mosaic.size / 100:
         # under one bit a photosite and (nearly) all zero: the data is missing, LibRaw read zeros
@@ -730,7 +743,7 @@ def _read_raw(
     }
     illum: str | None = None
     xyz_to_camera: np.ndarray | None = cam_xyz if np.any(cam_xyz) else None
-    tags, found = _dng_header(p, opcodes=opcodes)
+    tags, found, _ = header
     if tags:
         names = {v: k for k, v in CALIBRATION_ILLUMINANTS.items()}
         if "model" in tags:
