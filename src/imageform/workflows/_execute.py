@@ -153,6 +153,7 @@ def execute(
         if wf.output.default is None and wf.output.required:
             raise InvalidInputError(f"{wf.name} needs an output: -o/--out")
         out = wf.output.default
+    _refuse_shared_outputs(out, opts)
     outputs = Outputs(inputs=in_paths, force=force)
     try:
         with outputs:
@@ -180,6 +181,28 @@ def execute(
         raise explained from exc
     notes = tuple(run.notes) + tuple(dict.fromkeys(_note_of(w) for w in caught))
     return replace(result, notes=result.notes + notes)
+
+
+def _refuse_shared_outputs(out: str | Path | None, opts: Options) -> None:
+    """Refuse two outputs that name one path (``-o u.png --camera-out u.png``), before any work.
+
+    Each output is written under a temporary name and renamed at the end: two of them on one
+    path would leave only the last one written, silently.
+    """
+    import os
+
+    claimed = [("-o/--out", Path(out))] if out is not None else []
+    for f in opts.fields():
+        if f.metadata.get("output"):
+            claimed += [(flag_of(f), p) for p in _as_paths(getattr(opts, f.name), flag_of(f))]
+    seen: dict[str, str] = {}
+    for flag, p in claimed:
+        key = os.path.normcase(os.path.abspath(p))
+        if key in seen:
+            raise InvalidInputError(
+                f"{seen[key]} and {flag} both name {p}: give each output its own path"
+            )
+        seen[key] = flag
 
 
 def run_file(name: str, input_path: Path, output_path: Path, options: Options) -> Result:

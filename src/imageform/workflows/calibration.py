@@ -913,7 +913,14 @@ def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Re
 
         flat = Camera(cam.K, cam.R, cam.t, (w, h), cam.image_plane, None)
         based_on = opts.camera.name if opts.camera is not None else image.name
-        prov = replace(cf.provenance, command="imageform undistort", based_on=based_on)
+        # a new file: its date and imageform version are this writing's, not the source's
+        prov = replace(
+            cf.provenance,
+            command="imageform undistort",
+            based_on=based_on,
+            date=None,
+            imageform_version=None,
+        )
         std = {
             k: v for k, v in cf.std.items() if k in ("fx", "fy", "cx", "cy", "skew", "rvec", "t")
         }

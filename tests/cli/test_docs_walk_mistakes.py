@@ -1,0 +1,101 @@
+"""Mistakes a newcomer makes on the documented command lines: one clear line, a non-zero exit,
+nothing written, the inputs untouched (found walking docs/*.md's shell commands)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from imageform.cli import main
+from imageform.geometry import BrownConrady, Camera
+from imageform.io import write_camera, write_image
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file()}
+
+
+@pytest.fixture
+def distorted(tmp_path: Path) -> tuple[Path, Path]:
+    rng = np.random.default_rng(5)
+    write_image(tmp_path / "in.png", rng.random((30, 40, 3)))
+    cam = Camera(
+        [[40.0, 0, 19.5], [0, 40.0, 14.5], [0, 0, 1]],
+        image_size=(40, 30),
+        distortion=BrownConrady(k1=-0.2),
+    )
+    write_camera(tmp_path / "cam.toml", cam)
+    return tmp_path / "in.png", tmp_path / "cam.toml"
+
+
+def test_two_outputs_on_one_path_are_refused(
+    distorted: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``-o u.png --camera-out u.png`` wrote the camera file over the image and said it wrote
+    both; now refused before any work, naming both options."""
+    image, cam = distorted
+    before = _files(tmp_path)
+    out = tmp_path / "u.png"
+    for other in (str(out), str(tmp_path / "." / "u.png")):
+        code = main(
+            ["undistort", str(image), "-o", str(out), "--camera", str(cam)]
+            + ["--camera-out", other]
+        )
+        err = capsys.readouterr().err
+        assert code == 1 and err.count("\n") == 1
+        assert "-o/--out and --camera-out both name" in err
+        assert _files(tmp_path) == before  # nothing written, inputs untouched
+    # distinct paths still work
+    assert (
+        main(
+            [
+                "undistort",
+                str(image),
+                "-o",
+                str(out),
+                "--camera",
+                str(cam),
+                "--camera-out",
+                str(tmp_path / "u.toml"),
+            ]
+        )
+        == 0
+    )
+
+
+def test_camera_out_is_dated_when_written(distorted: tuple[Path, Path], tmp_path: Path) -> None:
+    """``undistort --camera-out`` copied the source file's provenance date (and version): the
+    schema's ``date`` is when the file was written."""
+    from dataclasses import replace
+    from datetime import UTC, datetime
+
+    from imageform.io import read_camera
+
+    image, cam = distorted
+    old = read_camera(cam)
+    stamped = replace(
+        old.provenance, date=datetime(2020, 1, 2, 3, 4, 5, tzinfo=UTC), imageform_version="0.0.1"
+    )
+    write_camera(cam, replace(old, provenance=stamped))
+    start = datetime.now(UTC).replace(microsecond=0)
+    out_cam = tmp_path / "flat.toml"
+    assert (
+        main(
+            [
+                "undistort",
+                str(image),
+                "-o",
+                str(tmp_path / "u.png"),
+                "--camera",
+                str(cam),
+                "--camera-out",
+                str(out_cam),
+            ]
+        )
+        == 0
+    )
+    prov = read_camera(out_cam).provenance
+    assert prov.date is not None and prov.date >= start
+    assert prov.imageform_version != "0.0.1" and prov.based_on == "cam.toml"
