@@ -99,3 +99,34 @@ def test_camera_out_is_dated_when_written(distorted: tuple[Path, Path], tmp_path
     prov = read_camera(out_cam).provenance
     assert prov.date is not None and prov.date >= start
     assert prov.imageform_version != "0.0.1" and prov.based_on == "cam.toml"
+
+
+@pytest.mark.parametrize("command", ["convert", "demosaic"])
+def test_sixteen_bit_jpeg_is_refused_up_front(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``-o x.jpg --bit-depth 16`` named the writer's temporary file in its error
+    (``write .x.jpg.31536-132c161e.part.png for 16``) after the work; now refused first."""
+    src = tmp_path / "in.png"
+    rgb = np.random.default_rng(1).random((8, 10, 3))
+    write_image(src, rgb[..., 1] if command == "demosaic" else rgb)
+    before = _files(tmp_path)
+    code = main([command, str(src), "-o", str(tmp_path / "x.jpg"), "--bit-depth", "16"])
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1 and ".part" not in err
+    assert "JPEG holds 8 bits per sample: --bit-depth 16 needs a .png or .tif output" in err
+    assert _files(tmp_path) == before
+
+
+def test_write_image_names_the_final_file_not_its_temporary(tmp_path: Path) -> None:
+    """The library writer's own messages name the user's file when given a temporary."""
+    from imageform._files import Outputs
+    from imageform.errors import InvalidInputError
+
+    with pytest.raises(InvalidInputError) as info, Outputs() as outs:
+        write_image(outs.file(tmp_path / "q.jpg"), np.zeros((4, 4, 3)), bit_depth=16)
+    assert str(info.value) == "JPEG holds 8 bits per sample; write q.png for 16"
+    with pytest.raises(InvalidInputError) as info, Outputs() as outs:
+        write_image(outs.file(tmp_path / "r.png"), np.full((4, 4, 3), 1.5), bit_depth=8)
+    assert "the 8-bit r.png;" in str(info.value) and ".part" not in str(info.value)
+    assert list(tmp_path.iterdir()) == []

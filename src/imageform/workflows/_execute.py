@@ -162,6 +162,8 @@ def execute(
                 (run.folder if wf.output is not None and wf.output.folder else run.file)(out)
             for extra in opts.paths("output"):
                 run.file(extra)
+            if out is not None and not (wf.output is not None and wf.output.folder):
+                opts.check_output(Path(out))  # what these options cannot write, before any work
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("ignore", DeprecationWarning)
                 warnings.simplefilter("ignore", PendingDeprecationWarning)

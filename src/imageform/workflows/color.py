@@ -147,6 +147,8 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
         """Refuse a PNG or JPEG output for a space whose values do not fit an integer image."""
         from imageform.io import image_format
 
+        super().check_output(path)
+
         if image_format(path) in ("png", "jpeg") and self.dst not in _DISPLAYABLE:
             raise InvalidInputError(
                 f"{self.dst} values do not fit an integer image: write {path.stem}.tif or "
