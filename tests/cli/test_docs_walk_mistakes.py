@@ -130,3 +130,57 @@ def test_write_image_names_the_final_file_not_its_temporary(tmp_path: Path) -> N
         write_image(outs.file(tmp_path / "r.png"), np.full((4, 4, 3), 1.5), bit_depth=8)
     assert "the 8-bit r.png;" in str(info.value) and ".part" not in str(info.value)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("reply", [None, b"HTTP/1.1 400 Bad Request\r\n\r\n"])
+def test_batch_scheduler_address_that_is_not_a_scheduler(
+    reply: bytes | None, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--scheduler`` at a server that never answers (a web server, the dashboard's port) hung
+    for good; one that answers in another protocol gave "not enough memory" and a traceback at
+    exit. Both are now one line within dask's connect timeout, and nothing is written."""
+    import socket
+    import threading
+    import time
+
+    import dask
+
+    pytest.importorskip("distributed")
+    write_image(tmp_path / "a.png", np.zeros((4, 6, 3)))
+    server = socket.create_server(("127.0.0.1", 0))
+    port = server.getsockname()[1]
+    stop = threading.Event()
+
+    def serve() -> None:
+        server.settimeout(0.1)
+        held = []
+        while not stop.is_set():
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                continue
+            held.append(conn)
+            if reply is not None:
+                conn.sendall(reply)
+        for c in held:
+            c.close()
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    try:
+        start = time.monotonic()
+        with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
+            code = main(
+                ["batch", "convert", f"{tmp_path}/*.png", "-o", str(tmp_path / "o"), "--to", "lab"]
+                + ["--suffix", ".npy", "--scheduler", f"tcp://127.0.0.1:{port}"]
+            )
+        took = time.monotonic() - start
+    finally:
+        stop.set()
+        thread.join()
+        server.close()
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1 and took < 20
+    assert err.startswith(f"imageform: error: cannot reach the scheduler tcp://127.0.0.1:{port}: ")
+    assert ("no dask scheduler answered" if reply is None else "not a dask scheduler") in err
+    assert not (tmp_path / "o").exists()
