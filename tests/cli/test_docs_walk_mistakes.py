@@ -184,3 +184,39 @@ def test_batch_scheduler_address_that_is_not_a_scheduler(
     assert err.startswith(f"imageform: error: cannot reach the scheduler tcp://127.0.0.1:{port}: ")
     assert ("no dask scheduler answered" if reply is None else "not a dask scheduler") in err
     assert not (tmp_path / "o").exists()
+
+
+def test_vanishing_with_a_camera_says_why_no_K_was_estimated(
+    shared_data: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """docs/geometry.md's ``vanishing photo.jpg --camera cam.toml --principal-point camera``
+    ("fit f alone") printed nothing about the fit when it was refused (left01.jpg with the
+    page's calibration: the focal length's spread over resamples 2.5 %, over the limit); the
+    reason was only in ``--json`` (K_reason). The refusal is forced here: near the limit the
+    real answer flips with the file's last digits."""
+    from dataclasses import replace
+
+    import imageform.geometry
+
+    real = imageform.geometry.detect_vanishing_points
+    reason = "not determined: the points converge too loosely to fix it (f would be 538 px)"
+
+    def refused(*args: object, **kwargs: object) -> object:
+        return replace(real(*args, **kwargs), K=None, K_reason=reason)  # type: ignore[type-var]
+
+    monkeypatch.setattr(imageform.geometry, "detect_vanishing_points", refused)
+    cam = Camera(
+        [[532.61, 0, 342.46], [0, 532.72, 234.11], [0, 0, 1]],
+        image_size=(640, 480),
+        distortion=BrownConrady(k1=-0.2903, k2=0.06651, p1=0.001059, p2=0.000161, k3=0.1154),
+    )
+    write_camera(tmp_path / "cam.toml", cam)
+    argv = ["vanishing", str(shared_data / "opencv-left" / "left01.jpg"), "--camera"]
+    argv += [str(tmp_path / "cam.toml"), "--principal-point", "camera"]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert f"K from the vanishing points: {reason}" in text
+    assert "K: f = 532.6 px" in text  # the file's K, as before
