@@ -220,3 +220,84 @@ def test_vanishing_with_a_camera_says_why_no_K_was_estimated(
     text = capsys.readouterr().out
     assert f"K from the vanishing points: {reason}" in text
     assert "K: f = 532.6 px" in text  # the file's K, as before
+
+
+@pytest.mark.parametrize(
+    ("extra", "says"),
+    [
+        (
+            ["--to", "lab", "--code-bits", "10"],
+            "--standard, --range and --code-bits apply to a "
+            "conversion from or to ycbcr, not the file's space -> lab",
+        ),
+        (
+            ["--from", "srgb", "--to", "lab", "--gray-method", "rec709"],
+            "--gray-method applies to a conversion from or to gray, not srgb -> lab",
+        ),
+        (
+            ["--to", "hsv", "--white", "D50"],
+            "--white applies to a conversion from or to lab or "
+            "lch or luv or xyy, not the file's space -> hsv",
+        ),
+        (["--to", "ycbcr", "--code-bits", "9"], "expected --code-bits 8, 10 or 12, got 9"),
+    ],
+)
+def test_convert_options_the_conversion_does_not_use(
+    extra: list[str], says: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``convert --to lab --code-bits 10`` answered in the library's parameter names
+    ("parameter(s) bit_depth not used converting srgb -> lab; valid here: alpha, observer,
+    white"), after reading the image; now in the command's flags, before reading it."""
+    write_image(tmp_path / "in.png", np.random.default_rng(2).random((6, 8, 3)))
+    code = main(["convert", str(tmp_path / "in.png"), "-o", str(tmp_path / "o.tif"), *extra])
+    err = capsys.readouterr().err
+    assert code == 1 and err == f"imageform: error: {says}\n"
+    assert not (tmp_path / "o.tif").exists()
+
+
+def test_convert_code_bits_twelve_and_the_defaults_help_states(tmp_path: Path) -> None:
+    """--help now states the defaults: bt601, full range, analog values; 12 bits is accepted
+    (the help said 8, 10)."""
+    from imageform.color import rgb_to_ycbcr
+
+    rgb = np.random.default_rng(3).random((6, 8, 3))
+    write_image(tmp_path / "in.png", rgb, bit_depth=16)
+    src = tmp_path / "in.png"
+    assert main(["convert", str(src), "-o", str(tmp_path / "a.npy"), "--to", "ycbcr"]) == 0
+    assert (
+        main(
+            [
+                "convert",
+                str(src),
+                "-o",
+                str(tmp_path / "b.npy"),
+                "--to",
+                "ycbcr",
+                "--standard",
+                "bt601",
+                "--range",
+                "full",
+            ]
+        )
+        == 0
+    )
+    np.testing.assert_array_equal(np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy"))
+    assert (
+        main(
+            [
+                "convert",
+                str(src),
+                "-o",
+                str(tmp_path / "c.npy"),
+                "--to",
+                "ycbcr",
+                "--range",
+                "limited",
+                "--code-bits",
+                "12",
+            ]
+        )
+        == 0
+    )
+    expect = rgb_to_ycbcr(np.round(rgb * 65535) / 65535, signal_range="limited", bit_depth=12)
+    np.testing.assert_allclose(np.load(tmp_path / "c.npy"), expect, rtol=0, atol=1e-3)

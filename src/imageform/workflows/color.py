@@ -102,16 +102,31 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
         help="Colour space of the output (see imageform.color.SPACES).",
         metavar="SPACE",
     )
-    white: str | None = option(None, help="Reference white for lab, luv, lch, xyy (e.g. D65).")
+    white: str | None = option(
+        None,
+        help="Reference white for lab, luv, lch, xyy (e.g. D50); default the RGB space's own "
+        "white (D65 for sRGB).",
+    )
     standard: _YccStandard | None = option(
-        None, help="Y'CbCr standard.", choices=get_args(_YccStandard)
+        None, help="Y'CbCr standard; default bt601.", choices=get_args(_YccStandard)
     )
     ycc_range: _YccRange | None = option(
-        None, flag="--range", help="Y'CbCr range.", choices=get_args(_YccRange)
+        None,
+        flag="--range",
+        help="Y'CbCr range: full (default) or limited (studio: 16-235 at 8 bits).",
+        choices=get_args(_YccRange),
     )
-    code_bits: int | None = option(None, help="Y'CbCr code-value bits (8, 10).", metavar="N")
+    code_bits: int | None = option(
+        None,
+        help="Y'CbCr as code values of this many bits (8, 10 or 12), unrounded floats; default "
+        "analog values (Y' in [0, 1], Cb and Cr in [-0.5, 0.5]), and 8 for --range limited.",
+        metavar="N",
+    )
     gray_method: _GrayMethod | None = option(
-        None, flag="--gray-method", help="Grey conversion.", choices=get_args(_GrayMethod)
+        None,
+        flag="--gray-method",
+        help="Grey conversion: rec601 luma (default) or rec709 luminance.",
+        choices=get_args(_GrayMethod),
     )
     window: str | None = option(
         None,
@@ -142,6 +157,32 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
         else:
             object.__setattr__(self, "src", space_name(self.src, "--from (src)"))
         object.__setattr__(self, "dst", space_name(self.dst, "--to (dst)"))
+
+    def check_used(self) -> None:
+        """Refuse, in the command's flags, an option the conversion does not use (before reading).
+
+        The library's own error names its parameters (``bit_depth``, ``observer``); options are
+        checked one by one at construction (tests/cli/test_grammar.py), so this runs first thing
+        in the command instead.
+        """
+        if self.code_bits is not None and self.code_bits not in (8, 10, 12):
+            raise InvalidInputError(f"expected --code-bits 8, 10 or 12, got {self.code_bits}")
+        ends = {self.src, self.dst}
+        source = "the file's space" if self.src == "auto" else self.src
+        for flags, given, spaces in (
+            (
+                "--standard, --range and --code-bits apply",
+                (self.standard, self.ycc_range, self.code_bits),
+                {"ycbcr"},
+            ),
+            ("--gray-method applies", (self.gray_method,), {"gray"}),
+            ("--white applies", (self.white,), {"lab", "lch", "luv", "xyy"}),
+        ):
+            if any(v is not None for v in given) and not ends & spaces:
+                raise InvalidInputError(
+                    f"{flags} to a conversion from or to {' or '.join(sorted(spaces))}, not "
+                    f"{source} -> {self.dst}"
+                )
 
     def check_output(self, path: Path) -> None:
         """Refuse a PNG or JPEG output for a space whose values do not fit an integer image."""
@@ -219,6 +260,7 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     from imageform.io import RGB_PROFILED, image_color_space
 
     dst = opts.dst
+    opts.check_used()
     opts.check_output(out)
     img = _read_dicom(image, opts)
     if opts.window is None and img.dtype.kind == "f" and img.shape[-1] == 1:
