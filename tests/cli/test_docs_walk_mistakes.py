@@ -301,3 +301,22 @@ def test_convert_code_bits_twelve_and_the_defaults_help_states(tmp_path: Path) -
     )
     expect = rgb_to_ycbcr(np.round(rgb * 65535) / 65535, signal_range="limited", bit_depth=12)
     np.testing.assert_allclose(np.load(tmp_path / "c.npy"), expect, rtol=0, atol=1e-3)
+
+
+@pytest.mark.parametrize("command", ["convert", "white-balance", "stain-normalize"])
+def test_chunked_help_lists_only_what_chunked_honours(
+    command: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``imageform chunked convert --help`` listed --alpha and --max-pixels (ignored: a 100 Mpx
+    default limit read as applying to a slide larger than memory) and --standard, --frame ...
+    (refused when given); it lists what chunked processing takes."""
+    from imageform.workflows.color import CHUNKED_OPTIONS
+
+    assert main(["chunked", command, "--help"]) == 0
+    text = capsys.readouterr().out
+    for flag in ("--alpha ", "--max-pixels", "--standard", "--frame", "--save-target PATH"):
+        assert flag not in text
+    assert "--chunk" in text and "--dtype" in text
+    assert len(CHUNKED_OPTIONS[command.replace("-", "_")]) >= 2
+    # a flag no longer listed is a usage error, not silently ignored
+    assert main(["chunked", command, "x.tif", "-o", "y.tif", "--max-pixels", "10"]) == 2

@@ -19,6 +19,7 @@ from imageform._files import refuse_special, refuse_special_inside
 from imageform.cli._build import CommandExit, _naming_files, option_params, take_old_flags
 from imageform.errors import ImageformError
 from imageform.workflows import Workflow
+from imageform.workflows.color import CHUNKED_OPTIONS
 
 __all__ = ["batch_group", "chunked_group"]
 
@@ -148,12 +149,8 @@ def _chunked_command(wf: Workflow) -> click.Command:
             required=True,
             help="Output: a tiled .tif or a .zarr array.",
         ),
-        *[
-            p
-            for p in option_params(wf)
-            # --window: a DICOM's VOI window; chunked reads tiled TIFF and Zarr only
-            if p.name not in ("bit_depth", "bits", "out_of_range", "clip", "device", "window")
-        ],
+        # only what chunked honours (--alpha, --max-pixels ... were listed and ignored)
+        *[p for p in option_params(wf) if p.name in CHUNKED_OPTIONS[wf.name.replace("-", "_")]],
         click.Option(
             ["--chunk"],
             type=click.INT,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any, Literal, get_args
 
 from imageform.errors import InvalidInputError
@@ -38,6 +39,7 @@ from imageform.workflows._spec import (
 )
 
 __all__ = [
+    "CHUNKED_OPTIONS",
     "DISPLAYABLE_SPACES",
     "WORKFLOWS",
     "ConvertOptions",
@@ -69,6 +71,25 @@ _DISPLAYABLE = (
 
 #: Colour spaces whose values are RGB-like in [0, 1] (an integer image can hold them).
 DISPLAYABLE_SPACES = _DISPLAYABLE
+
+#: The options ``imageform chunked COMMAND`` honours, per command: workflow field -> the name
+#: ``imageform.batch.chunked``'s block functions take. The command line lists only these
+#: (``--alpha``, ``--max-pixels`` ... were listed in ``--help`` and ignored or refused).
+CHUNKED_OPTIONS = MappingProxyType(
+    {
+        "stain_normalize": MappingProxyType({"target": "target", "method": "method"}),
+        "convert": MappingProxyType({"src": "from", "dst": "to", "white": "white"}),
+        "white_balance": MappingProxyType(
+            {
+                "method": "method",
+                "p": "p",
+                "normalize": "normalize",
+                "illuminant": "illuminant",
+                "cct": "cct",
+            }
+        ),
+    }
+)
 
 # ---------------------------------------------------------------- convert
 
