@@ -273,9 +273,16 @@ def run_batch(
                 f"{suffix!r}"
             )
         opts.check_output(Path("output" + suffix))
-    for p in opts.paths("input"):
-        if not p.is_file():
-            raise InvalidInputError(f"{p} does not exist (an input file named by an option)")
+    from imageform.workflows import flag_of
+
+    for f in opts.fields():
+        value = getattr(opts, f.name)
+        if not f.metadata.get("input") or value is None:
+            continue
+        for p in map(Path, value if isinstance(value, (tuple, list)) else [value]):
+            if not p.is_file():
+                what = "is not a file" if p.exists() else "does not exist"
+                raise InvalidInputError(f"{flag_of(f)} file {p} {what}")
     out_root = Path(os.path.abspath(out_dir))
     producer = _producer(wf, opts)
     manifest = _read_manifest(out_root)
