@@ -320,3 +320,22 @@ def test_chunked_help_lists_only_what_chunked_honours(
     assert len(CHUNKED_OPTIONS[command.replace("-", "_")]) >= 2
     # a flag no longer listed is a usage error, not silently ignored
     assert main(["chunked", command, "x.tif", "-o", "y.tif", "--max-pixels", "10"]) == 2
+
+
+def test_from_lines_estimate_without_distortion_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``undistort --from-lines --estimate lens.toml`` on a photograph without distortion said
+    "wrote lens.toml (the estimated camera, none distortion)"."""
+    from imageform.io import read_camera
+
+    v, u = np.mgrid[0:240, 0:320]
+    board = ((u // 40 + v // 40) % 2).astype(np.float64) * 0.8 + 0.1
+    write_image(tmp_path / "flat.png", board)
+    argv = ["undistort", str(tmp_path / "flat.png"), "--from-lines", "-o"]
+    argv += [str(tmp_path / "out.png"), "--estimate", str(tmp_path / "lens.toml")]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert read_camera(tmp_path / "lens.toml").distortion_model == "none"
+    assert "wrote " in out and "(the estimated camera, no distortion found: model none)" in out
+    assert "none distortion" not in out

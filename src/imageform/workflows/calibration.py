@@ -962,7 +962,8 @@ def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Re
     if opts.camera_out is not None:
         text.append(f"wrote {opts.camera_out} (the same camera, distortion none)")
     if opts.estimate is not None:
-        text.append(f"wrote {opts.estimate} (the estimated camera, {model} distortion)")
+        what = "no distortion found: model none" if model == "none" else f"{model} distortion"
+        text.append(f"wrote {opts.estimate} (the estimated camera, {what})")
     return Result(summary, tuple(text))
 
 
