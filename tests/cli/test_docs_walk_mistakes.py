@@ -339,3 +339,22 @@ def test_from_lines_estimate_without_distortion_says_so(
     assert read_camera(tmp_path / "lens.toml").distortion_model == "none"
     assert "wrote " in out and "(the estimated camera, no distortion found: model none)" in out
     assert "none distortion" not in out
+
+
+def test_help_describes_the_positional_inputs(capsys: pytest.CaptureFixture[str]) -> None:
+    """``pose --help`` never said what POINTS holds, nor ``triangulate --help`` OBSERVATIONS,
+    nor ``palette-check --help`` COLORS: every command's help now gives each input's own text."""
+    from imageform.workflows.registry import WORKFLOWS
+
+    for name, expect in (
+        ("pose", "POINTS: CSV of X, Y, Z, u, v"),
+        ("triangulate", "OBSERVATIONS: CSV of u1, v1, u2, v2"),
+        ("palette-check", "COLORS: Comma-separated hex colours"),
+    ):
+        assert main([name, "--help"]) == 0
+        assert expect in " ".join(capsys.readouterr().out.split())
+    for wf in WORKFLOWS.values():
+        assert main([wf.name, "--help"]) == 0
+        text = " ".join(capsys.readouterr().out.split())
+        for inp in wf.inputs:
+            assert " ".join(inp.help.split()) in text, (wf.name, inp.name)
