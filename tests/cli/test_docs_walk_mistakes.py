@@ -358,3 +358,17 @@ def test_help_describes_the_positional_inputs(capsys: pytest.CaptureFixture[str]
         text = " ".join(capsys.readouterr().out.split())
         for inp in wf.inputs:
             assert " ".join(inp.help.split()) in text, (wf.name, inp.name)
+
+
+def test_an_image_given_as_the_camera_file(
+    distorted: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``undistort left01.jpg --camera photo.png`` answered "'utf-8' codec can't decode byte
+    0x89 in position 0: invalid start byte"."""
+    image, _ = distorted
+    before = _files(tmp_path)
+    code = main(["undistort", str(image), "-o", str(tmp_path / "u.png"), "--camera", str(image)])
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1 and "codec" not in err
+    assert f"{image} is not a camera file: not UTF-8 text (byte 0)" in err
+    assert _files(tmp_path) == before
