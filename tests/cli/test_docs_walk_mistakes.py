@@ -372,3 +372,20 @@ def test_an_image_given_as_the_camera_file(
     assert code == 1 and err.count("\n") == 1 and "codec" not in err
     assert f"{image} is not a camera file: not UTF-8 text (byte 0)" in err
     assert _files(tmp_path) == before
+
+
+@pytest.mark.parametrize(
+    ("argv", "flag"),
+    [
+        (["chunked", "convert", "s.tif", "-o", "o.tif", "--chunk", "0"], "--chunk"),
+        (["chunked", "convert", "s.tif", "-o", "o.tif", "--tile", "7"], "--tile"),
+        (["batch", "convert", "*.png", "-o", "o", "--workers", "0"], "--workers"),
+    ],
+)
+def test_scale_out_numbers_are_refused_by_their_flag(
+    argv: list[str], flag: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--chunk 0, --tile 7, --workers 0 were refused in the library's names ("expected chunk
+    >= 1", "expected n_workers >= 1"); now as usage errors naming the flag."""
+    assert main(argv) == 2
+    assert f"Invalid value for '{flag}'" in capsys.readouterr().err
