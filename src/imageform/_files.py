@@ -45,6 +45,7 @@ __all__ = [
     "atomic_write",
     "check_output",
     "check_writable",
+    "final_name",
     "not_a_regular_file",
     "publish",
     "refuse_special",
@@ -75,6 +76,17 @@ class OutputWriteError(ImageformError, OSError):
 
     def __str__(self) -> str:
         return str(self.args[0]) if self.args else ""
+
+
+def final_name(name: str) -> str:
+    """Return the user's name of a file name, which may be a temporary one of :class:`Outputs`.
+
+    Examples
+    --------
+    >>> final_name(".out.png.12-ab12cd34.part.png"), final_name("out.png")
+    ('out.png', 'out.png')
+    """
+    return _unpart(name)
 
 
 def _unpart(name: str) -> str:

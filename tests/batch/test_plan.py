@@ -121,8 +121,10 @@ def test_command_options_checked(tmp_path: Path) -> None:
         run_batch("convert", glob_, tmp_path / "o", {"to": "lab"}, scheduler="tcp://127.0.0.1:1")
     with pytest.raises(InvalidInputError, match=r"writes \.png"):
         run_batch("mosaic", glob_, tmp_path / "o", {}, out_suffix=".json")
-    with pytest.raises(InvalidInputError, match="does not exist"):
+    with pytest.raises(InvalidInputError, match=r"^--correction file .*no\.json does not exist$"):
         run_batch("harmonize", glob_, tmp_path / "o", {"correction": str(tmp_path / "no.json")})
+    with pytest.raises(InvalidInputError, match=r"^--correction file .* is not a file$"):
+        run_batch("harmonize", glob_, tmp_path / "o", {"correction": str(tmp_path)})
     assert not (tmp_path / "o").exists()  # refused before anything ran
 
 

@@ -198,7 +198,7 @@ def test_a_16_bit_jpeg_is_refused_first_by_its_own_name(
     out = tmp_path / "x.jpg"
     assert main([name, str(rgb_png), "-o", str(out), "--bit-depth", "16", *extra]) == 1
     err = capsys.readouterr().err
-    assert "JPEG holds 8 bits per sample: give -o x.png or x.tif for --bit-depth 16" in err
+    assert "JPEG holds 8 bits per sample: --bit-depth 16 needs a .png or .tif output" in err
     assert ".part" not in err and not out.exists()
 
 

@@ -55,7 +55,7 @@ from imageform.batch._write import (
     _write_zarr,
 )
 from imageform.errors import ImageformError, InvalidInputError, UnreadableFileError
-from imageform.workflows.color import DISPLAYABLE_SPACES
+from imageform.workflows.color import CHUNKED_OPTIONS, DISPLAYABLE_SPACES
 
 __all__ = ["CHUNKED_COMMANDS", "ChunkedResult", "open_lazy", "process_chunked"]
 
@@ -96,17 +96,7 @@ class ChunkedResult:
 
 #: Options of each command that chunked processing honours (the others must keep their
 #: default).
-_HONOURED = {
-    "stain_normalize": {"target": "target", "method": "method"},
-    "convert": {"src": "from", "dst": "to", "white": "white"},
-    "white_balance": {
-        "method": "method",
-        "p": "p",
-        "normalize": "normalize",
-        "illuminant": "illuminant",
-        "cct": "cct",
-    },
-}
+_HONOURED = CHUNKED_OPTIONS
 
 
 def _declared(path: Path) -> str:

@@ -115,6 +115,50 @@ def _interrupt_flag() -> Iterator[threading.Event]:
         signal.signal(signal.SIGINT, old)
 
 
+def _probe_scheduler(address: str) -> None:
+    """Refuse, within dask's connect timeout, an address where no dask scheduler answers.
+
+    ``distributed.Client`` waits for the scheduler's handshake without a time limit: at a
+    server that never answers (a web server, the dashboard's port 8787 given for the
+    scheduler's 8786) it hung for good, and bytes of another protocol read as a frame length
+    asked for exabytes ("not enough memory") and left a traceback at exit. The probe is the
+    same connection and handshake, bounded, in a thread of its own (a caller's running event
+    loop, as in a notebook, is left alone).
+    """
+    import asyncio
+    import concurrent.futures
+
+    import dask
+    from dask.utils import parse_timedelta
+    from distributed.comm import connect
+
+    limit = float(parse_timedelta(dask.config.get("distributed.comm.timeouts.connect"), "s"))
+
+    async def handshake() -> None:
+        comm = await connect(address, timeout=limit)
+        await comm.close()
+
+    def probe() -> None:
+        asyncio.run(asyncio.wait_for(handshake(), limit + 1.0))
+
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        try:
+            pool.submit(probe).result()
+        except TimeoutError:
+            raise InvalidInputError(
+                f"cannot reach the scheduler {address}: no dask scheduler answered within "
+                f"{limit:g} s (a scheduler listens on tcp://host:8786 by default; 8787 is its "
+                "dashboard)"
+            ) from None
+        except OSError as exc:
+            raise InvalidInputError(f"cannot reach the scheduler {address}: {exc}") from None
+        except Exception as exc:  # another protocol's bytes: not a dask scheduler
+            raise InvalidInputError(
+                f"cannot reach the scheduler {address}: what answers there is not a dask "
+                f"scheduler ({type(exc).__name__})"
+            ) from None
+
+
 @contextlib.contextmanager
 def _client(
     scheduler: str | None, n_workers: int, interrupted: threading.Event | None = None
@@ -229,9 +273,16 @@ def run_batch(
                 f"{suffix!r}"
             )
         opts.check_output(Path("output" + suffix))
-    for p in opts.paths("input"):
-        if not p.is_file():
-            raise InvalidInputError(f"{p} does not exist (an input file named by an option)")
+    from imageform.workflows import flag_of
+
+    for f in opts.fields():
+        value = getattr(opts, f.name)
+        if not f.metadata.get("input") or value is None:
+            continue
+        for p in map(Path, value if isinstance(value, (tuple, list)) else [value]):
+            if not p.is_file():
+                what = "is not a file" if p.exists() else "does not exist"
+                raise InvalidInputError(f"{flag_of(f)} file {p} {what}")
     out_root = Path(os.path.abspath(out_dir))
     producer = _producer(wf, opts)
     manifest = _read_manifest(out_root)
@@ -247,6 +298,8 @@ def run_batch(
     if not todo:
         _remove_stale_temps(jobs, out_root)  # left by runs that died
     else:
+        if scheduler is not None:
+            _probe_scheduler(scheduler)  # before the output folder is made
         with _run_lock(out_root) as run_id:
             _remove_stale_temps(jobs, out_root, run_id)  # of runs that died, not running ones
             workers = n_workers or min(os.cpu_count() or 1, len(todo))

@@ -19,6 +19,7 @@ from imageform._files import refuse_special, refuse_special_inside
 from imageform.cli._build import CommandExit, _naming_files, option_params, take_old_flags
 from imageform.errors import ImageformError
 from imageform.workflows import Workflow
+from imageform.workflows.color import CHUNKED_OPTIONS
 
 __all__ = ["batch_group", "chunked_group"]
 
@@ -86,7 +87,11 @@ def _batch_command(wf: Workflow) -> click.Command:
             ["--scheduler"], default=None, help="Address of a running dask scheduler (tcp://...)."
         ),
         click.Option(
-            ["--workers"], type=click.INT, default=None, help="Worker processes of a local cluster."
+            ["--workers"],
+            type=click.IntRange(1, 4096),
+            default=None,
+            help="Worker processes of a local cluster (default: one per CPU, at most one per "
+            "file).",
         ),
         click.Option(["--suffix"], default=None, help="Output suffix (.png, .tif, .npy)."),
         click.Option(["--force"], is_flag=True, help="Redo outputs that are up to date."),
@@ -148,24 +153,21 @@ def _chunked_command(wf: Workflow) -> click.Command:
             required=True,
             help="Output: a tiled .tif or a .zarr array.",
         ),
-        *[
-            p
-            for p in option_params(wf)
-            # --window: a DICOM's VOI window; chunked reads tiled TIFF and Zarr only
-            if p.name not in ("bit_depth", "bits", "out_of_range", "clip", "device", "window")
-        ],
+        # only what chunked honours (--alpha, --max-pixels ... were listed and ignored)
+        *[p for p in option_params(wf) if p.name in CHUNKED_OPTIONS[wf.name.replace("-", "_")]],
         click.Option(
             ["--chunk"],
-            type=click.INT,
+            type=click.IntRange(1, 16384),
             default=1024,
             show_default=True,
             help="Block size in pixels (a multiple of --tile).",
         ),
         click.Option(
             ["--tile"],
-            type=click.INT,
+            type=click.IntRange(16),
             default=None,
-            help="Tile size of a TIFF output (default: the input's tiles, else 256).",
+            help="Tile size of a TIFF output, a multiple of 16 dividing --chunk (default: the "
+            "input's tiles, else 256).",
         ),
         click.Option(
             ["--pyramid"],

@@ -402,6 +402,10 @@ def build_command(wf: Workflow) -> click.Command:
             raise CommandExit(3)
 
     help_text = wf.summary + ("\n\n" + wf.description if wf.description else "")
+    # the positional inputs' own help (a file's format: pose's POINTS, palette-check's COLORS)
+    for inp in wf.inputs:
+        name = inp.metavar or inp.name.upper() + ("..." if inp.many else "")
+        help_text += f"\n\n{name}: {inp.help}"
     return click.Command(
         wf.name,
         params=params,

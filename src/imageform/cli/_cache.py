@@ -218,7 +218,7 @@ def cache_command(warm: bool, clear: bool, jobs: int | None, as_json: bool) -> N
         }[reason]
         click.echo(f"cache: {where} ({why})")
         if clear:
-            click.echo(f"removed {removed} files")
+            click.echo(f"removed {removed} file{'' if removed == 1 else 's'}")
         for name, secs, why in warmed:
             click.echo(f"warmed: imageform {name}: {secs:.1f} s" + (" FAILED" if why else ""))
         click.echo(f"{len(files)} files, {size / 1e6:.1f} MB")

@@ -120,10 +120,10 @@ def read_camera(path: str | Path) -> CameraFile:
         raise InvalidInputError(f"camera file {p} does not exist")
     try:
         text = p.read_text(encoding="utf-8")
-    except UnicodeDecodeError:
+    except UnicodeDecodeError as exc:  # an image or other binary file given for the camera
         raise InvalidInputError(
-            f"{p} is not a camera file: not text (the file is TOML, as imageform calibrate "
-            "writes it)"
+            f"{p} is not a camera file: not UTF-8 text (byte {exc.start}); a camera file is "
+            "the TOML that imageform calibrate writes (docs/camera-file.md)"
         ) from None
     except OSError as exc:
         raise InvalidInputError(f"cannot read camera file {p}: {exc}") from None

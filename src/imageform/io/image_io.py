@@ -67,7 +67,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from imageform import _deprecate
-from imageform._files import atomic_write, check_writable, not_a_regular_file
+from imageform._files import atomic_write, check_writable, final_name, not_a_regular_file
 from imageform._typing import ArrayLike
 from imageform._validate import (
     as_path,
@@ -1267,6 +1267,7 @@ def write_image(
         )
         out_of_range = "clip" if clip else "error"
     p = check_writable(path, "path")
+    shown = p.with_name(final_name(p.name))  # the user's name in messages, not a temporary's
     fmt = image_format(p)
     out_of_range = check_option(out_of_range, _OUT_OF_RANGE, "out-of-range policy")
     profile = None
@@ -1301,7 +1302,7 @@ def write_image(
         tifffile = _tifffile()
         n_out = 0
         if bits is not None:
-            a, n_out = _quantise(a, bits, out_of_range, p)
+            a, n_out = _quantise(a, bits, out_of_range, shown)
         channels = a.shape[-1] if a.ndim == 3 else 1
         extra: dict[str, Any] = {"extrasamples": ["unassalpha"]} if channels in (2, 4) else {}
         photometric = "rgb" if channels in (3, 4) else "minisblack"
@@ -1312,10 +1313,10 @@ def write_image(
     depth = bits if bits is not None else (16 if a.dtype == np.uint16 else 8)
     if fmt == "jpeg":
         if depth != 8:
-            raise InvalidInputError(f"JPEG holds 8 bits per sample; write {p.stem}.png for 16")
+            raise InvalidInputError(f"JPEG holds 8 bits per sample; write {shown.stem}.png for 16")
         if a.ndim == 3 and a.shape[-1] in (2, 4):
-            raise InvalidInputError(f"JPEG has no alpha channel; write {p.stem}.png to keep it")
-    q, n_out = _quantise(a, depth, out_of_range, p)
+            raise InvalidInputError(f"JPEG has no alpha channel; write {shown.stem}.png to keep it")
+    q, n_out = _quantise(a, depth, out_of_range, shown)
     rgb = q.ndim == 3 and q.shape[-1] in (3, 4)
     if fmt == "png":
         import imagecodecs

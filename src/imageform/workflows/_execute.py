@@ -102,18 +102,6 @@ def _check_folder_name(wf: Workflow, out: Path) -> None:
         )
 
 
-def _check_jpeg_depth(opts: Options, out: Path) -> None:
-    """Refuse ``-o x.jpg --bit-depth 16`` before the work.
-
-    The writer's message named its temporary file, after the work.
-    """
-    if getattr(opts, "bit_depth", None) == 16 and out.suffix.lower() in (".jpg", ".jpeg"):
-        raise InvalidInputError(
-            f"JPEG holds 8 bits per sample: give -o {out.stem}.png or {out.stem}.tif for "
-            "--bit-depth 16"
-        )
-
-
 def execute(
     workflow: Workflow | str,
     *,
@@ -174,8 +162,6 @@ def execute(
         raise InvalidInputError(
             f"expected options as {wf.options.__name__} for {wf.name}, got {type(opts).__name__}"
         )
-    if out is not None:
-        _check_jpeg_depth(opts, Path(out))
     names = {i.name for i in wf.inputs}
     if set(inputs) != names:
         raise InvalidInputError(
@@ -204,6 +190,7 @@ def execute(
         if wf.output.default is None and wf.output.required:
             raise InvalidInputError(f"{wf.name} needs an output: -o/--out")
         out = wf.output.default
+    _refuse_shared_outputs(out, opts)
     outputs = Outputs(inputs=in_paths, force=force)
     try:
         with outputs:
@@ -217,6 +204,8 @@ def execute(
             }
             for extra in opts.paths("output"):  # a folder option (simulate --lab) is one
                 (run.folder if extra in folders else run.file)(extra)
+            if out is not None and not (wf.output is not None and wf.output.folder):
+                opts.check_output(Path(out))  # what these options cannot write, before any work
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("ignore", DeprecationWarning)
                 warnings.simplefilter("ignore", PendingDeprecationWarning)
@@ -236,6 +225,28 @@ def execute(
         raise explained from exc
     notes = tuple(run.notes) + tuple(dict.fromkeys(_note_of(w) for w in caught))
     return replace(result, notes=result.notes + notes)
+
+
+def _refuse_shared_outputs(out: str | Path | None, opts: Options) -> None:
+    """Refuse two outputs that name one path (``-o u.png --camera-out u.png``), before any work.
+
+    Each output is written under a temporary name and renamed at the end: two of them on one
+    path would leave only the last one written, silently.
+    """
+    import os
+
+    claimed = [("-o/--out", Path(out))] if out is not None else []
+    for f in opts.fields():
+        if f.metadata.get("output"):
+            claimed += [(flag_of(f), p) for p in _as_paths(getattr(opts, f.name), flag_of(f))]
+    seen: dict[str, str] = {}
+    for flag, p in claimed:
+        key = os.path.normcase(os.path.abspath(p))
+        if key in seen:
+            raise InvalidInputError(
+                f"{seen[key]} and {flag} both name {p}: give each output its own path"
+            )
+        seen[key] = flag
 
 
 def run_file(name: str, input_path: Path, output_path: Path, options: Options) -> Result:

@@ -83,6 +83,14 @@ class ImageOut(Options):
         if self.clip:
             object.__setattr__(self, "out_of_range", "clip")
 
+    def check_output(self, path: Path) -> None:
+        """Refuse ``--bit-depth 16`` into a JPEG before any work (JPEG holds 8 bits)."""
+        super().check_output(path)
+        if self.bit_depth == 16 and path.suffix.lower() in (".jpg", ".jpeg"):
+            raise InvalidInputError(
+                "JPEG holds 8 bits per sample: --bit-depth 16 needs a .png or .tif output"
+            )
+
 
 #: The old names of :class:`ImageOut`'s fields (issue 30: one spelling per concept), kept one
 #: release: put it above ``@dataclass`` of every options class with ImageOut. The constructor

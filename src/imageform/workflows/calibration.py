@@ -931,7 +931,14 @@ def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Re
 
         flat = Camera(cam.K, cam.R, cam.t, (w, h), cam.image_plane, None)
         based_on = opts.camera.name if opts.camera is not None else image.name
-        prov = replace(cf.provenance, command="imageform undistort", based_on=based_on)
+        # a new file: its date and imageform version are this writing's, not the source's
+        prov = replace(
+            cf.provenance,
+            command="imageform undistort",
+            based_on=based_on,
+            date=None,
+            imageform_version=None,
+        )
         std = {
             k: v for k, v in cf.std.items() if k in ("fx", "fy", "cx", "cy", "skew", "rvec", "t")
         }
@@ -973,7 +980,8 @@ def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Re
     if opts.camera_out is not None:
         text.append(f"wrote {opts.camera_out} (the same camera, distortion none)")
     if opts.estimate is not None:
-        text.append(f"wrote {opts.estimate} (the estimated camera, {model} distortion)")
+        what = "no distortion found: model none" if model == "none" else f"{model} distortion"
+        text.append(f"wrote {opts.estimate} (the estimated camera, {what})")
     return Result(summary, tuple(text))
 
 

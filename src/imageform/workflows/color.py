@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any, Literal, get_args
 
 from imageform.errors import InvalidInputError
@@ -38,6 +39,7 @@ from imageform.workflows._spec import (
 )
 
 __all__ = [
+    "CHUNKED_OPTIONS",
     "DISPLAYABLE_SPACES",
     "WORKFLOWS",
     "ConvertOptions",
@@ -69,6 +71,25 @@ _DISPLAYABLE = (
 
 #: Colour spaces whose values are RGB-like in [0, 1] (an integer image can hold them).
 DISPLAYABLE_SPACES = _DISPLAYABLE
+
+#: The options ``imageform chunked COMMAND`` honours, per command: workflow field -> the name
+#: ``imageform.batch.chunked``'s block functions take. The command line lists only these
+#: (``--alpha``, ``--max-pixels`` ... were listed in ``--help`` and ignored or refused).
+CHUNKED_OPTIONS = MappingProxyType(
+    {
+        "stain_normalize": MappingProxyType({"target": "target", "method": "method"}),
+        "convert": MappingProxyType({"src": "from", "dst": "to", "white": "white"}),
+        "white_balance": MappingProxyType(
+            {
+                "method": "method",
+                "p": "p",
+                "normalize": "normalize",
+                "illuminant": "illuminant",
+                "cct": "cct",
+            }
+        ),
+    }
+)
 
 # ---------------------------------------------------------------- convert
 
@@ -102,16 +123,31 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
         help="Colour space of the output (see imageform.color.SPACES).",
         metavar="SPACE",
     )
-    white: str | None = option(None, help="Reference white for lab, luv, lch, xyy (e.g. D65).")
+    white: str | None = option(
+        None,
+        help="Reference white for lab, luv, lch, xyy (e.g. D50); default the RGB space's own "
+        "white (D65 for sRGB).",
+    )
     standard: _YccStandard | None = option(
-        None, help="Y'CbCr standard.", choices=get_args(_YccStandard)
+        None, help="Y'CbCr standard; default bt601.", choices=get_args(_YccStandard)
     )
     ycc_range: _YccRange | None = option(
-        None, flag="--range", help="Y'CbCr range.", choices=get_args(_YccRange)
+        None,
+        flag="--range",
+        help="Y'CbCr range: full (default) or limited (studio: 16-235 at 8 bits).",
+        choices=get_args(_YccRange),
     )
-    code_bits: int | None = option(None, help="Y'CbCr code-value bits (8, 10).", metavar="N")
+    code_bits: int | None = option(
+        None,
+        help="Y'CbCr as code values of this many bits (8, 10 or 12), unrounded floats; default "
+        "analog values (Y' in [0, 1], Cb and Cr in [-0.5, 0.5]), and 8 for --range limited.",
+        metavar="N",
+    )
     gray_method: _GrayMethod | None = option(
-        None, flag="--gray-method", help="Grey conversion.", choices=get_args(_GrayMethod)
+        None,
+        flag="--gray-method",
+        help="Grey conversion: rec601 luma (default) or rec709 luminance.",
+        choices=get_args(_GrayMethod),
     )
     window: str | None = option(
         None,
@@ -143,9 +179,37 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
             object.__setattr__(self, "src", space_name(self.src, "--from (src)"))
         object.__setattr__(self, "dst", space_name(self.dst, "--to (dst)"))
 
+    def check_used(self) -> None:
+        """Refuse, in the command's flags, an option the conversion does not use (before reading).
+
+        The library's own error names its parameters (``bit_depth``, ``observer``); options are
+        checked one by one at construction (tests/cli/test_grammar.py), so this runs first thing
+        in the command instead.
+        """
+        if self.code_bits is not None and self.code_bits not in (8, 10, 12):
+            raise InvalidInputError(f"expected --code-bits 8, 10 or 12, got {self.code_bits}")
+        ends = {self.src, self.dst}
+        source = "the file's space" if self.src == "auto" else self.src
+        for flags, given, spaces in (
+            (
+                "--standard, --range and --code-bits apply",
+                (self.standard, self.ycc_range, self.code_bits),
+                {"ycbcr"},
+            ),
+            ("--gray-method applies", (self.gray_method,), {"gray"}),
+            ("--white applies", (self.white,), {"lab", "lch", "luv", "xyy"}),
+        ):
+            if any(v is not None for v in given) and not ends & spaces:
+                raise InvalidInputError(
+                    f"{flags} to a conversion from or to {' or '.join(sorted(spaces))}, not "
+                    f"{source} -> {self.dst}"
+                )
+
     def check_output(self, path: Path) -> None:
         """Refuse a PNG or JPEG output for a space whose values do not fit an integer image."""
         from imageform.io import image_format
+
+        super().check_output(path)
 
         if image_format(path) in ("png", "jpeg") and self.dst not in _DISPLAYABLE:
             raise InvalidInputError(
@@ -217,6 +281,7 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     from imageform.io import RGB_PROFILED, image_color_space
 
     dst = opts.dst
+    opts.check_used()
     opts.check_output(out)
     img = _read_dicom(image, opts)
     if opts.window is None and img.dtype.kind == "f" and img.shape[-1] == 1:

@@ -316,6 +316,9 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             off = 100 * (res.K[0, 0] / f_exif - 1)
             line += f"; the vanishing points' f is {off:+.1f} % from it"
         text.append(line)
+    if cf is not None and K_est is None and res.K_reason is not None:
+        # the file gives K; say why the vanishing points gave none to report against it
+        text.append(f"K from the vanishing points: {res.K_reason}")
     if "focal_error_px" in extra:
         text.append(
             f"K from the vanishing points: f = {K_est[0, 0]:.1f} px ("  # type: ignore[index]
