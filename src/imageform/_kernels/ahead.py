@@ -159,9 +159,10 @@ PLANS: dict[str, Plan] = {
                 "sgm",
                 "match",
                 "(uint8[:, :, ::1], float32[:, ::1], int64, int64, boolean, int64, float64,"
-                " float64, uint16[:, :, ::1])",
+                " float64, uint16[:, :, ::1], boolean)",
             ),
             Entry("sgm", "speckles", "(float32[:, ::1], int64, float64)"),
+            Entry("sgm", "median3", "(float32[:, ::1],)"),
         ),
         here=(
             Entry("sgm", "census", "(float32[:, ::1], int64)"),

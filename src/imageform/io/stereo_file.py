@@ -266,7 +266,8 @@ def read_stereo_camera(path: str | Path) -> StereoCameraFile:
     fmt = data.get("format")
     if fmt != STEREO_FILE_FORMAT:
         hint = (
-            " (a single camera's file, as calibrate writes; a stereo camera file is written by "
+            " (a single camera's file, as calibrate writes, which read_camera reads; a stereo "
+            "camera file is written by "
             "imageform stereo-calibrate, or stereo_calibrate and write_stereo_camera)"
             if fmt == CAMERA_FILE_FORMAT
             else ""

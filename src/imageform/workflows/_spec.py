@@ -418,7 +418,11 @@ class Run:
 def check_suffix(path: Path | None, suffix: str, flag: str, what: str) -> None:
     """Refuse an output ``path`` of ``flag`` that does not end in ``suffix`` (JSON in a .png)."""
     if path is not None and path.suffix.lower() != suffix:
-        raise InvalidInputError(f"{flag} writes {what}: give a {suffix} name, not {path.name!r}")
+        from imageform._validate import shorten
+
+        raise InvalidInputError(
+            f"{flag} writes {what}: give a {suffix} name, not {shorten(repr(path.name), 60)}"
+        )
 
 
 def refuse_foreign_folder(
