@@ -64,7 +64,8 @@ def test_convert_to_tiled_tiff_uint8(tiled: tuple[Path, np.ndarray], tmp_path: P
     ref = np.asarray(convert(img, "srgb", "display_p3"))
     r = process_chunked(src, tmp_path / "p3.tif", "convert", {"to": "display_p3"}, chunk=512)
     assert r.dtype == "uint8"
-    assert r.clipped == int(np.count_nonzero((ref < 0) | (ref > 1)))
+    codes = np.round(ref.astype(np.float64) * 255)  # clipped: the values whose code the clip moves
+    assert r.clipped == int(np.count_nonzero((codes < 0) | (codes > 255)))
     expected = np.round(np.clip(ref, 0, 1) * 255).astype(np.uint8)
     np.testing.assert_array_equal(_read(r.output), expected)
     # the output is itself a valid chunked input (Zarr store of the tiled TIFF)

@@ -40,6 +40,34 @@ def test_convert_to_lab_tiff_and_back(
     np.testing.assert_array_equal(read_image(back), read_image(rgb_png))
 
 
+def test_a_lab_round_trip_stores_every_value_without_a_note(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """docs/color-spaces.md's round trip on a photograph: the values float rounding brings
+    back a hair outside [0, 1] (-1.7e-7) keep their own codes, so --out-of-range error
+    passes, no clip note is printed, and the 16-bit codes are the photograph's x 257 (within
+    one code: Lab is stored as float32)."""
+    photo = tmp_path / "photo.png"
+    rng = np.random.default_rng(3)
+    a = rng.integers(0, 256, (64, 64, 3)).astype(np.uint8)
+    a[:8] = 0  # black and white, where the round trip strays outside
+    a[8:16] = 255
+    write_image(photo, a)
+    lab, back = tmp_path / "lab.tif", tmp_path / "back.png"
+    assert main(["convert", str(photo), "-o", str(lab), "--from", "srgb", "--to", "lab"]) == 0
+    lab_values = np.asarray(read_image(lab))
+    from imageform.color import convert as _convert
+
+    raw = np.asarray(_convert(lab_values, "lab", "srgb"))
+    assert raw.min() < 0 or raw.max() > 1  # the rounding strays the rule is about
+    capsys.readouterr()
+    args = ["convert", str(lab), "-o", str(back), "--from", "lab", "--to", "srgb"]
+    assert main([*args, "--bit-depth", "16", "--out-of-range", "error"]) == 0
+    assert "clipped" not in capsys.readouterr().err
+    diff = np.abs(read_image(back).astype(np.int64) - a.astype(np.int64) * 257)
+    assert diff.max() <= 1
+
+
 def test_16bit_png_and_ycbcr_params(rgb_png: Path, tmp_path: Path) -> None:
     out = tmp_path / "p3.png"
     assert (

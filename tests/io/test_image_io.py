@@ -245,19 +245,36 @@ def test_quantising_by_bands_is_the_whole_image_rule(
     monkeypatch.setattr(image_io, "_QUANTISE_BAND", 5 * 7 * 3)  # bands of 5 rows
     rng = np.random.default_rng(4)
     a = rng.uniform(-0.1, 1.1, (23, 7, 3))
-    n = int(np.count_nonzero((a < 0) | (a > 1)))
+    a[0, 0] = -0.4 / 255, 1 + 0.4 / 255, 1 + 0.6 / 255  # within half a code (8 bits) and not
     for bits, dtype in ((8, np.uint8), (16, np.uint16)):
+        top = 2**bits - 1
+        n = int(np.count_nonzero((a < -0.5 / top) | (a > 1 + 0.5 / top)))
         written = write_image(tmp_path / f"a{bits}.png", a, bit_depth=bits, out_of_range="clip")
         assert written.out_of_range == n
-        expect = np.round(np.clip(a, 0, 1) * (2**bits - 1)).astype(dtype)
+        expect = np.round(np.clip(a, 0, 1) * top).astype(dtype)
         np.testing.assert_array_equal(read_image(tmp_path / f"a{bits}.png"), expect)
-    with pytest.raises(InvalidInputError, match=rf"^{n} values outside \[0, 1\] \(min -0\.0"):
+    n8 = int(np.count_nonzero((a < -0.5 / 255) | (a > 1 + 0.5 / 255)))
+    with pytest.raises(InvalidInputError, match=rf"^{n8} values outside \[0, 1\] \(min -0\.0"):
         write_image(tmp_path / "e.png", a, out_of_range="error")
     assert not (tmp_path / "e.png").exists()
     nan = a.copy()
     nan[20, 3, 1] = np.nan
     with pytest.raises(InvalidInputError, match="contains NaN or inf"):
         write_image(tmp_path / "n.png", nan, out_of_range="clip")
+
+
+def test_a_value_a_rounding_error_outside_is_not_clipped(tmp_path: Path) -> None:
+    """A value outside [0, 1] by less than half a code has its own code: stored, not counted,
+    not refused by out_of_range="error" (a Lab round trip gives -1.7e-7); half a code or more
+    outside is (its code would be -1 or 256)."""
+    tiny = np.array([[[-1.7e-7, 1 + 1e-6, 0.5]]], np.float32)
+    for bits in (8, 16):
+        w = write_image(tmp_path / f"t{bits}.png", tiny, bit_depth=bits, out_of_range="error")
+        assert w.out_of_range == 0
+        top = 2**bits - 1
+        assert read_image(tmp_path / f"t{bits}.png").tolist() == [[[0, top, round(0.5 * top)]]]
+    with pytest.raises(InvalidInputError, match=r"^1 values outside \[0, 1\]"):
+        write_image(tmp_path / "h.png", np.array([[[-0.51 / 255, 0.0, 1.0]]]))
 
 
 # ---------------------------------------------------------------- TIFF samples as they mean

@@ -120,9 +120,12 @@ def _finish(
         return f, 0, _reduce(f, factor) if factor else None
     if np.shares_memory(f, block) or not f.flags.writeable:
         f = f.copy()
-    n = int(np.count_nonzero(f < 0)) + int(np.count_nonzero(f > 1))
-    np.clip(f, 0.0, 1.0, out=f)  # in place: the block's own float result, no temporaries
-    f *= 255.0 if dtype == "uint8" else 65535.0
+    top = 255.0 if dtype == "uint8" else 65535.0
+    f *= top  # in place: the block's own float result, no temporaries
+    # outside: the values whose code the clip changes (io.image_io.float_codes' rule: a
+    # rounding error outside [0, 1] keeps its own code); top + 0.5 rounds to top + 1 (even)
+    n = int(np.count_nonzero(f < -0.5)) + int(np.count_nonzero(f >= top + 0.5))
+    np.clip(f, 0.0, top, out=f)
     q = np.rint(f, out=f).astype(dtype)
     return q, n, _reduce(q, factor) if factor else None
 

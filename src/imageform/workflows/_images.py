@@ -332,6 +332,7 @@ def write_mapped(
     import numpy as np
 
     from imageform.io import image_format, write_image
+    from imageform.io.image_io import float_codes
 
     fmt = image_format(path)
     bits = getattr(opts, "bit_depth", None)
@@ -368,9 +369,9 @@ def write_mapped(
         if integer and band.dtype.kind == "f":  # as write_image quantises (NaN/inf refused)
             if not np.all(np.isfinite(band)):
                 raise InvalidInputError(f"the image to write to {path} contains NaN or inf")
-            n_out += int(np.count_nonzero((band < 0) | (band > 1)))
-            top = 2**depth - 1
-            dest[r0 : r0 + rows] = np.round(np.clip(band, 0.0, 1.0) * top).astype(dest.dtype)
+            codes, outside = float_codes(band, depth)
+            n_out += outside
+            dest[r0 : r0 + rows] = codes
         elif integer:  # integer samples: rescaled by write_image's rule
             top, src_top = 2**depth - 1, np.iinfo(band.dtype).max
             dest[r0 : r0 + rows] = (
