@@ -60,6 +60,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "chart-marks": "benchmarks/check_chart_marks.py",
     "chart-photos": "benchmarks/check_chart_photos.py",
     "chart-real": "benchmarks/check_chart_real.py",
+    "chart-third": "benchmarks/check_chart_real.py",
     "board-fresh": "benchmarks/check_board_fresh.py",
     "board-third": "benchmarks/check_board_third.py",
     "charuco": "benchmarks/bench_charuco.py",

@@ -192,6 +192,27 @@ def test_clean_pixels_spread_is_the_normal_consistent_mad() -> None:
     assert _clean_pixels(np.full((10, 3), 0.3)).all()  # a flat rendered patch: no spread
 
 
+def test_kept_median_is_numpys_nanmedian() -> None:
+    """The median over the kept pixels is ``np.nanmedian`` with the others NaN, bit for bit
+    (odd and even counts, ties, a patch with none kept: NaN)."""
+    import warnings
+
+    from imageform.analysis.chart_grid import _kept_median
+
+    rng = np.random.default_rng(3)
+    for trial in range(60):
+        n = int(rng.integers(1, 50))
+        px = rng.random((4, 2, n, 3))
+        if trial % 2:
+            px = np.round(px * 6) / 6  # ties
+        keep = rng.random((4, 2, n)) < rng.uniform(0.0, 1.0)
+        keep[0, 0] = False
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            want = np.nanmedian(np.where(keep[..., None], px, np.nan), axis=-2, keepdims=True)
+        assert np.array_equal(_kept_median(px, keep), want, equal_nan=True)
+
+
 @pytest.mark.parametrize("bad", [0.0, -0.1, 1.5, float("nan"), "half", None])
 def test_min_clean_bad_input(bad: object) -> None:
     """``min_clean`` outside (0, 1] is one clear error."""

@@ -33,6 +33,13 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    hypothesis counts the candidates on its lattice (RANSAC-style, all hypotheses at once).
 4. **Growth.** The best lattices are refitted as homographies (normalised DLT) from integer
    lattice coordinates to the candidates' centroids, re-collecting candidates, three times.
+   The windows of at most eight lattices are scored (step 5). A lattice with more than
+   twice a chart's 24 cells on it (tiles, the cells of a grid of lines, a facade: a
+   periodic texture) is taken whole, none of its cells starting another, and is not
+   counted among the eight (twelve lattices grown at most): a scene with many such
+   textures ranked above a chart no longer uses up the search before the chart is reached.
+   Such a lattice has the affine fit of step 5 only, without its least-median retry and
+   without the costlier fits of steps 6 and 7.
 5. **Chart, orientation and validity by colour.** Every 4 × 6 window of the lattice in
    either of its two chart orientations (the two quarter turns the window's shape allows;
    never mirrored: the basis is right-handed like the image) whose homography can be a
@@ -734,7 +741,7 @@ def _bound(others: np.ndarray) -> float:
 
 
 def _colour_fit(
-    meas: np.ndarray, ref_lin: np.ndarray, usable: np.ndarray
+    meas: np.ndarray, ref_lin: np.ndarray, usable: np.ndarray, robust: bool = True
 ) -> tuple[float, np.ndarray]:
     """Return R² of the affine linear-light fit ref ~ [meas, 1] W and the colour outliers.
 
@@ -745,7 +752,8 @@ def _colour_fit(
     dropped and the search repeated, at most six times; a dropped patch that the final fit
     predicts within the bound is taken back. In CIELAB dark patches count as much as light
     ones, and a channel clipped at the edge of the gamut (the ColorChecker's cyan has no
-    red in sRGB) moves the colour little: no patch is rejected for its gamut.
+    red in sRGB) moves the colour little: no patch is rejected for its gamut. With
+    ``robust``, an R² under ``_ROBUST_BELOW`` is tried again by :func:`_lmeds_fit`.
     """
     x = np.c_[srgb_decode(np, np.clip(meas, 0.0, 1.0)), np.ones(len(meas))]
     lab_ref = _lab_from_linear(ref_lin)
@@ -774,7 +782,7 @@ def _colour_fit(
         use |= back
         out &= ~back
     r2 = _r2(x, ref_lin, use)
-    if r2 < _ROBUST_BELOW:
+    if robust and r2 < _ROBUST_BELOW:
         # several patches off at once (glare over a corner of the chart) mask one another
         # in the leave-one-out tests: a least-median-of-squares fit does not see them
         r2_lms, out_lms = _lmeds_fit(x, ref_lin, lab_ref, usable)
@@ -900,13 +908,13 @@ def _shading_fit(
 
 
 def _window_fit(
-    mean: np.ndarray, ref_lin: np.ndarray, usable: np.ndarray, shading: bool
+    mean: np.ndarray, ref_lin: np.ndarray, usable: np.ndarray, shading: bool, robust: bool = True
 ) -> tuple[float, np.ndarray]:
     """R² and outliers of the affine fit, or of the colour homography with ``shading``."""
     if shading:
         r2, out, _ = _shading_fit(mean, ref_lin, usable)
         return r2, out
-    return _colour_fit(mean, ref_lin, usable)
+    return _colour_fit(mean, ref_lin, usable, robust)
 
 
 #: The largest ratio of two patches' image areas on one chart: a chart tilted by 60 degrees
@@ -947,12 +955,17 @@ def _best_window(
     ref_lin: np.ndarray,
     shading: bool = False,
     trim: bool = False,
+    robust: bool = True,
 ) -> tuple[float, np.ndarray, np.ndarray] | None:
-    """Best (score, chart->lattice map, outliers) over windows and quarter turns."""
+    """Best (score, chart->lattice map, outliers) over windows and quarter turns.
+
+    ``robust`` False: the affine fit without the least-median retry (a periodic texture's
+    lattice).
+    """
     umin, vmin = keys.min(axis=0).astype(int)
     umax, vmax = keys.max(axis=0).astype(int)
     best: tuple[float, np.ndarray, np.ndarray] | None = None
-    key_set = {(int(a), int(b)) for a, b in keys}
+    ku, kv = np.unique(keys.astype(int), axis=0).T
     for quarter in range(4):
         wu, wv = (_COLS, _ROWS) if quarter % 2 == 0 else (_ROWS, _COLS)
         # every window that overlaps the lattice: one whose patches run past the lattice (a
@@ -963,12 +976,10 @@ def _best_window(
             for u0 in range(umin - wu + 1, umax + 1)
             for v0 in range(vmin - wv + 1, vmax + 1)
         ]
-        counts = [
-            sum((u0 <= a < u0 + wu) and (v0 <= b < v0 + wv) for a, b in key_set)
-            for u0, v0 in placements
-        ]
-        if not counts:
+        if not placements:
             continue
+        pu, pv = np.asarray(placements).T[:, :, None]
+        counts = ((ku >= pu) & (ku < pu + wu) & (kv >= pv) & (kv < pv + wv)).sum(axis=1).tolist()
         top = max(counts)
         for (u0, v0), cnt in zip(placements, counts, strict=True):
             if cnt < max(top - 2, 6) or (shading and cnt < _SHADING_MIN_SEGMENTED):
@@ -979,10 +990,35 @@ def _best_window(
                 continue
             mean, spread = _sample(work, hc, trim)
             usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
-            r2, out = _window_fit(mean, ref_lin, usable, shading)
+            r2, out = _window_fit(mean, ref_lin, usable, shading, robust)
             if best is None or r2 > best[0]:
                 best = (r2, a, out)
     return best
+
+
+#: Lattices of a chart's size whose windows :func:`_search` scores, at most (lattices of a
+#: periodic texture, over ``_TEXTURE_CELLS`` candidates, not counted), and all lattices
+#: grown, at most (so at most four textures' lattices are grown without counting).
+_ATTEMPTS, _GROWN = 8, 12
+#: A lattice with more candidates on it than this (anywhere within 12 cells of its origin)
+#: is a periodic texture, not a chart (24 patches): twice a chart's count.
+_TEXTURE_CELLS = 48
+
+
+def _on_lattice(
+    cand: dict[str, np.ndarray], h: np.ndarray, idx: np.ndarray, keys: np.ndarray
+) -> np.ndarray:
+    """Return every candidate on the grown lattice ``h`` (indices), whatever its extent.
+
+    A degenerate ``h`` (the last refit of a lattice grown from a few collinear candidates)
+    collects nothing more than the lattice's own ``idx``.
+    """
+    area_scale = float(np.median(cand["area"][idx] / np.maximum(_cell_area(h, keys), 1e-9)))
+    try:
+        every, _, _ = _collect(cand, h, area_scale, 0.28)
+    except np.linalg.LinAlgError:
+        return idx
+    return every
 
 
 def _search(
@@ -1003,21 +1039,31 @@ def _search(
     tried: set[int] = set()
     best: tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
     lattices: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-    attempts = 0
+    attempts = grown_n = 0
     for hyp in order:
-        if score[hyp] < 6 or attempts >= 8:
+        if score[hyp] < 6 or attempts >= _ATTEMPTS or grown_n >= _GROWN:
             break
         if int(origin[hyp]) in tried:
             continue
         grown = _grow(cand, int(origin[hyp]), basis[hyp])
-        attempts += 1
+        grown_n += 1
         tried.add(int(origin[hyp]))
         if grown is None:
+            attempts += 1
             continue
         h, idx, keys = grown
         tried.update(int(i) for i in idx)
-        lattices.append(grown)
-        win = _best_window(work, h, keys, ref_lin)
+        # every candidate on the lattice, past the chart-sized window it grew in, is tried
+        # with it (no more origins on it); a periodic texture (tiles, a grid of lines, a
+        # facade) continues far past a chart's 24 cells and does not use up the attempts
+        # left for lattices of a chart's size
+        every = _on_lattice(cand, h, idx, keys)
+        tried.update(int(i) for i in every)
+        texture = len(every) > _TEXTURE_CELLS
+        if not texture:
+            attempts += 1
+            lattices.append(grown)
+        win = _best_window(work, h, keys, ref_lin, robust=not texture)
         if win is None:
             continue
         r2, a, out = win
@@ -1035,7 +1081,9 @@ def _search(
         # on each patch's dominant colour, accepted only at the stricter _TRIMMED_MIN_SCORE
         # (trimmed samples make more false lattices usable). Both are tried and the better
         # wins: a chart whose every patch carries a mark has no plain fit at all, and the
-        # colour homography of a lattice of clutter beside it must not win by default
+        # colour homography of a lattice of clutter beside it must not win by default. The
+        # lattices of periodic textures (over _TEXTURE_CELLS candidates) had the plain
+        # least-squares fit only: the costlier fits are for lattices of a chart's size
         shaded = trimmed = None
         for h, idx, keys in lattices:
             win = _best_window(work, h, keys, ref_lin, shading=True)

@@ -93,6 +93,22 @@ class ChartPatches:
 _CLEAN_SIGMAS, _CLEAN_FLOOR = 4.0, 0.02
 
 
+def _kept_median(px: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """Per-channel median (..., 1, 3) of the pixels (..., N, 3) where ``keep`` (..., N).
+
+    ``np.nanmedian`` of the pixels with the others NaN, the same values (the middle one, or
+    the mean of the middle two), from one sort instead of masked arrays; NaN where none is
+    kept.
+    """
+    srt = np.sort(np.where(keep[..., None], px, np.inf), axis=-2)
+    n = keep.sum(axis=-1)[..., None, None]
+    lo = np.broadcast_to(np.maximum(n - 1, 0) // 2, (*px.shape[:-2], 1, px.shape[-1]))
+    hi = np.broadcast_to(n // 2, lo.shape)
+    hi = np.minimum(hi, px.shape[-2] - 1)
+    mid = (np.take_along_axis(srt, lo, axis=-2) + np.take_along_axis(srt, hi, axis=-2)) / 2
+    return np.where(n > 0, mid, np.nan)
+
+
 def _clean_pixels(px: np.ndarray) -> np.ndarray:
     """Mask of the pixels (..., N, 3) that agree with their patch's dominant colour.
 
@@ -103,19 +119,14 @@ def _clean_pixels(px: np.ndarray) -> np.ndarray:
     taken again over the rest (twice). The median belongs to the clean part as long as the
     marks cover under half the pixels. Leading axes are separate patches.
     """
-    import warnings
-
     keep = np.ones(px.shape[:-1], dtype=bool)
     for _ in range(2):
         if keep.all():
             med = np.median(px, axis=-2, keepdims=True)
             mad = 1.4826 * np.median(np.abs(px - med), axis=-2, keepdims=True)
         else:
-            ref = np.where(keep[..., None], px, np.nan)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)  # a patch with none kept
-                med = np.nanmedian(ref, axis=-2, keepdims=True)
-                mad = 1.4826 * np.nanmedian(np.abs(ref - med), axis=-2, keepdims=True)
+            med = _kept_median(px, keep)
+            mad = 1.4826 * _kept_median(np.abs(px - med), keep)
         tol = np.maximum(_CLEAN_SIGMAS * mad, _CLEAN_FLOOR)
         keep = (np.abs(px - med) <= tol).all(axis=-1)
     return np.asarray(keep)
