@@ -1111,6 +1111,9 @@ VALID.update(
         "imageform.workflows.color.ConvertOptions.check": method(
             VALID["imageform.workflows.color.ConvertOptions"]
         ),
+        "imageform.workflows.color.ConvertOptions.check_used": method(
+            VALID["imageform.workflows.color.ConvertOptions"]
+        ),
         "imageform.workflows.color.ConvertOptions.params": method(
             VALID["imageform.workflows.color.ConvertOptions"]
         ),
