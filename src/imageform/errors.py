@@ -66,11 +66,22 @@ class UnreadableFileError(InvalidInputError):
         The file.
     reason : str
         Why it cannot be read, in a few words ("an empty file (0 bytes)").
+
+    Attributes
+    ----------
+    path, reason : str
+        As given.
+    brief : str
+        ``reason`` for a note that names the file already: without the file's name (a
+        decoder's own words may repeat it) and without an empty file's byte count
+        ("an empty file").
     """
 
     def __init__(self, path: str | os.PathLike[str], reason: str) -> None:
         self.path = os.fspath(path)
         self.reason = reason
+        brief = reason.removesuffix(" (0 bytes)")
+        self.brief = brief.replace(f" '{self.path}'", "").replace(f" {self.path}", "")
         super().__init__(f"cannot read {self.path}: {reason}")
 
     def __reduce__(self) -> tuple[type[UnreadableFileError], tuple[str, str]]:

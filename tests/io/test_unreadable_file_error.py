@@ -22,7 +22,10 @@ def test_message_parts_and_pickling() -> None:
     error sent back to the scheduler) is equal in all three."""
     exc = UnreadableFileError(Path("/x/a.png"), "not a PNG file")
     assert str(exc) == "cannot read /x/a.png: not a PNG file"
-    assert (exc.path, exc.reason) == ("/x/a.png", "not a PNG file")
+    assert (exc.path, exc.reason, exc.brief) == ("/x/a.png", "not a PNG file", "not a PNG file")
+    named = UnreadableFileError("/x/e.jpg", "cannot identify image file '/x/e.jpg'")
+    assert named.brief == "cannot identify image file"
+    assert UnreadableFileError("/x/e.jpg", "an empty file (0 bytes)").brief == "an empty file"
     assert isinstance(exc, InvalidInputError) and isinstance(exc, ValueError)
     back = pickle.loads(pickle.dumps(exc))
     assert type(back) is UnreadableFileError

@@ -88,7 +88,7 @@ def test_image_sequence_skips_frames_that_cannot_be_read(tmp_path: Path) -> None
     assert [f.name for f, _ in reader.skipped] == ["f0.png", "f3.png"]
     assert reader.skipped[0][1] == "an empty file (0 bytes)"
     texts = [str(w.message) for w in caught]
-    assert texts[0] == f"{tmp_path / 'f0.png'}: skipped, cannot be read (an empty file (0 bytes))"
+    assert texts[0] == f"{tmp_path / 'f0.png'}: skipped, cannot be read (an empty file)"
     assert texts[1].startswith(f"{tmp_path / 'f3.png'}: skipped, cannot be read (")
     bad = tmp_path / "bad"
     bad.mkdir()

@@ -463,9 +463,7 @@ class VideoReader:
         from imageform.errors import ImageformWarning
 
         self.skipped.append((f, exc.reason))
-        warnings.warn(
-            f"{f}: skipped, cannot be read ({exc.reason})", ImageformWarning, stacklevel=2
-        )
+        warnings.warn(f"{f}: skipped, cannot be read ({exc.brief})", ImageformWarning, stacklevel=2)
 
     @staticmethod
     def _first_info(files: list[Path], image_info: Any) -> Any:

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from imageform import _deprecate
-from imageform.errors import InvalidInputError, UnreadableFileError
+from imageform.errors import InvalidInputError
 from imageform.workflows._spec import Options, Run, option
 
 __all__ = [
@@ -32,7 +32,6 @@ __all__ = [
     "read",
     "refuse_absent_device",
     "refuse_unscaled_floats",
-    "unreadable",
     "write",
     "write_mapped",
 ]
@@ -184,16 +183,6 @@ def read(path: Path, opts: Any, *, alpha: str | None = None) -> Any:
         alpha=str(alpha or getattr(opts, "alpha", "reject")),
         max_pixels=getattr(opts, "max_pixels", None),
     )
-
-
-def unreadable(exc: UnreadableFileError) -> str:
-    """Say in a few words why a file cannot be read, for a note that names the file.
-
-    ``exc.reason`` without the file's name (a decoder's own message may repeat it) and
-    without the byte count of an empty file.
-    """
-    why = exc.reason.removesuffix(" (0 bytes)")
-    return why.replace(f" '{exc.path}'", "").replace(f" {exc.path}", "")
 
 
 def not_read(given: int, n_read: int) -> str:

@@ -21,7 +21,6 @@ from imageform.workflows._images import (
     image_out_renames,
     not_read,
     read,
-    unreadable,
     write,
 )
 from imageform.workflows._spec import (
@@ -501,7 +500,7 @@ def _read_views(run: Run, opts: CalibrateOptions, images: list[Path]) -> Iterato
         except UnreadableFileError as exc:
             if f not in run.gathered:
                 raise
-            run.note(f"warning: {f}: skipped, cannot be read ({unreadable(exc)})")
+            run.note(f"warning: {f}: skipped, cannot be read ({exc.brief})")
             continue
         if shape0 is None:
             shape0 = tuple(img.shape[:2])

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from imageform.errors import DegenerateConfigurationError, InvalidInputError, UnreadableFileError
-from imageform.workflows._images import ImageIn, not_read, read, unreadable
+from imageform.workflows._images import ImageIn, not_read, read
 from imageform.workflows._spec import (
     Input,
     Output,
@@ -144,7 +144,7 @@ def _detect(
 
     Returns the images' size ``(W, H)`` (None when none was read) and each image's
     ``CheckerboardResult``; with ``skip`` (the files of a folder or a glob pattern), a file
-    that cannot be read gets instead the reason, a str (:func:`~._images.unreadable`).
+    that cannot be read gets instead the reason, a str (``UnreadableFileError.brief``).
     """
     from imageform.geometry.checkerboard import find_checkerboard
 
@@ -156,7 +156,7 @@ def _detect(
         except UnreadableFileError as exc:
             if not skip:
                 raise
-            found.append(unreadable(exc))
+            found.append(exc.brief)
             continue
         if size is None:
             size = (int(img.shape[1]), int(img.shape[0]))
