@@ -181,6 +181,24 @@ def _rgb8(image: np.ndarray, where: str) -> np.ndarray:
     return a
 
 
+def _first_info(files: list[Path]) -> Any:
+    """Return the header of an image sequence's first file that can be read.
+
+    Files before it are skipped with a warning when the frames are read; raises the first
+    file's UnreadableFileError when no file's header can be read.
+    """
+    from imageform.io.image_io import image_info
+
+    first_error: UnreadableFileError | None = None
+    for f in files:
+        try:
+            return image_info(f)
+        except UnreadableFileError as exc:
+            first_error = first_error or exc
+    assert first_error is not None
+    raise first_error
+
+
 class VideoReader:
     """Frames of a video file, an image sequence or a capture device, one at a time.
 
@@ -241,7 +259,7 @@ class VideoReader:
         auto_method: str = "fields",
     ) -> None:
         from imageform._validate import check_option
-        from imageform.io.image_io import _pixel_limit, image_info
+        from imageform.io.image_io import _pixel_limit
         from imageform.io.interlace import DEINTERLACE_METHODS, FIELD_ORDERS
 
         if not isinstance(source, str | os.PathLike):
@@ -264,7 +282,7 @@ class VideoReader:
         self._iterated = False
         self.skipped: list[tuple[Path, str]] = []
         if self._files is not None:
-            first = self._first_info(self._files, image_info)
+            first = _first_info(self._files)
             self._check_size(first.width, first.height)
             self.info = VideoInfo(
                 first.width, first.height, float(fps or 30.0), len(self._files), "sequence",
@@ -464,22 +482,6 @@ class VideoReader:
 
         self.skipped.append((f, exc.reason))
         warnings.warn(f"{f}: skipped, cannot be read ({exc.brief})", ImageformWarning, stacklevel=2)
-
-    @staticmethod
-    def _first_info(files: list[Path], image_info: Any) -> Any:
-        """Return the header of the sequence's first file that can be read.
-
-        Files before it are skipped with a warning when the frames are read; raises the
-        first file's UnreadableFileError when no file's header can be read.
-        """
-        first_error: UnreadableFileError | None = None
-        for f in files:
-            try:
-                return image_info(f)
-            except UnreadableFileError as exc:
-                first_error = first_error or exc
-        assert first_error is not None
-        raise first_error
 
     def _decode(self) -> Iterator[Frame]:
         av = _av()

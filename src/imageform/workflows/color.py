@@ -281,8 +281,7 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     from imageform.io import RGB_PROFILED, image_color_space
 
     dst = opts.dst
-    opts.check_used()
-    opts.check_output(out)
+    opts.check_used()  # the output was checked by execute (check_output), before this
     img = _read_dicom(image, opts)
     if opts.window is None and img.dtype.kind == "f" and img.shape[-1] == 1:
         _refuse_unwindowed(image, img)
