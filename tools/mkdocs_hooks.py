@@ -125,6 +125,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "stereo-depth": "benchmarks/check_stereo_depth.py",
     "stereo-vertical": "benchmarks/check_stereo_vertical.py",
     "track": "benchmarks/bench_track.py",
+    "twin-loop": "benchmarks/check_twin_loop.py",
     "twoview": "benchmarks/bench_twoview.py",
     "twoview-cap": "benchmarks/check_twoview_cap.py",
     "twoview-e": "benchmarks/bench_twoview.py",

@@ -61,7 +61,7 @@ def test_rails_vanishing_point_and_horizon() -> None:
     vp = res.vanishing
     assert vp is not None and vp.detected_vanishing_point is not None
     err = res.metrics["vanishing_point_error_px"]
-    assert err < 2.0, err  # measured 0.95 px
+    assert err < 2.0, err  # measured 0.21 px (0.95 before LSD on the undistorted image)
     # the horizon: level like the true one and through the true vanishing point (< 2 px)
     assert vp.detected_horizon is not None
     assert res.metrics["horizon_angle_error_deg"] < 0.5
@@ -70,6 +70,37 @@ def test_rails_vanishing_point_and_horizon() -> None:
     assert abs(a * u + b * v + c) / math.hypot(a, b) < 2.0
     # the true horizon passes through the true vanishing point of a horizontal direction
     assert abs(np.dot(vp.horizon, vp.vanishing_point / vp.vanishing_point[2])) < 1e-9
+
+
+def test_rails_under_strong_barrel_distortion() -> None:
+    """A calibrated webcam's distortion (OpenCV's left camera: k1 -0.29, k2 0.066, k3 0.115)
+    on the built-in scene at 640 x 360: the rails are curves, so the simulator detects on the
+    image undistorted with the camera's own model. Detected on the distorted image, the
+    point was 5.2-7.8 px off for seeds 0-3 (and 2400-3800 px at 640 x 480 through the
+    twin of that camera, docs/characterize.md); undistorted 0.42-0.54 px."""
+    from importlib.resources import files
+
+    text = files("imageform.simulate").joinpath("scenes/default.toml").read_text()
+    edits = {
+        "k1 = -0.12\nk2 = 0.01": "k1 = -0.29\nk2 = 0.066\nk3 = 0.115",
+        "width = 1280": "width = 640",
+        "height = 720": "height = 360",
+        "pixel_pitch_um = 1.75": "pixel_pitch_um = 3.5",
+    }
+    for old, new in edits.items():
+        assert old in text, old
+        text = text.replace(old, new)
+    scene = load_scene(text)
+    for seed in (0, 1):
+        res = simulate(scene, rng=seed)
+        assert res.metrics["vanishing_point_error_px"] < 1.5, seed
+        assert res.metrics["horizon_angle_error_deg"] < 1.0, seed
+        vp = res.vanishing
+        assert vp is not None and vp.detected_vanishing_point is not None
+        # reported in the distorted image's pixels, next to the distorted truth
+        d = vp.detected_vanishing_point[:2] / vp.detected_vanishing_point[2]
+        t = vp.vanishing_point[:2] / vp.vanishing_point[2]
+        assert float(np.hypot(*(d - t))) < 1.5
 
 
 def test_colorchecker_under_a_corrected_to_d65_truth() -> None:
@@ -106,4 +137,5 @@ def test_default_scene_full_size() -> None:
     res = simulate(default_scene(), rng=0)
     assert time.perf_counter() - t0 < 60.0
     assert res.metrics["delta_e00_mean"] <= 3.0  # measured 2.32
-    assert res.metrics["vanishing_point_error_px"] < 2.0  # measured 1.45
+    assert res.metrics["vanishing_point_error_px"] < 2.0  # measured 0.29 (1.45 before the
+    # image was undistorted with the camera's model for the detection)

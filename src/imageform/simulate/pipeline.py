@@ -427,7 +427,9 @@ def _vanishing(
     ]
     if not grounds:
         return None, {}
-    return detect_vanishing(output, rails_truth(grounds[0], scene.camera), rng=seed)
+    return detect_vanishing(
+        output, rails_truth(grounds[0], scene.camera), camera=scene.camera, rng=seed
+    )
 
 
 def _patch_metrics(m: PatchMeasurements) -> dict[str, Any]:
