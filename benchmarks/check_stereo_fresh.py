@@ -47,7 +47,7 @@ What is measured, per board set:
   the RMS (both libraries' definition: ``sqrt(Σ e² / 2N)`` over both cameras), the baseline
   ``‖T‖``, the angle between the two ``R``, the focal lengths. The CLI ``imageform
   stereo-calibrate`` on the set's files: pairs used, RMS, baseline (it should equal the
-  function's).
+  function's), and ``imageform depth --disparity`` with that rig file on the first pair.
 - **Rectification**: each library's calibration rectified by its own ``stereoRectify``
   (alpha -1, zero disparity), the board corners of every pair taken through it
   (``cv2.undistortPoints`` iterated to 1e-10, the same Brown-Conrady model in both): the
@@ -253,24 +253,36 @@ def _rect_error(
 
 
 def _cli(
-    folder: Path, lg: str, rg: str, board: tuple[int, int], square: float | None
+    folder: Path, lg: str, rg: str, board: tuple[int, int], square: float | None, tmp: Path
 ) -> dict[str, Any] | None:
+    """``imageform stereo-calibrate`` on the set's files; the rig file written in ``tmp``."""
     from imageform.cli import main
 
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "rig.toml"
-        argv = ["stereo-calibrate", str(folder / lg), str(folder / rg)]
-        argv += ["--board", f"{board[0]}x{board[1]}", "-o", str(out), "--force", "--json"]
-        if square is not None:
-            argv += ["--square", f"{square}mm"]
-        with (
-            contextlib.redirect_stdout(io.StringIO()) as so,
-            contextlib.redirect_stderr(io.StringIO()),
-        ):
-            code = main(argv)
+    out = tmp / "rig.toml"
+    argv = ["stereo-calibrate", str(folder / lg), str(folder / rg)]
+    argv += ["--board", f"{board[0]}x{board[1]}", "-o", str(out), "--force", "--json"]
+    if square is not None:
+        argv += ["--square", f"{square}mm"]
+    with (
+        contextlib.redirect_stdout(io.StringIO()) as so,
+        contextlib.redirect_stderr(io.StringIO()),
+    ):
+        code = main(argv)
     if code != 0:
         return None
-    return json.loads(so.getvalue())
+    return dict(json.loads(so.getvalue()))
+
+
+def _cli_depth(pair: tuple[Path, Path], rig: Path, lo: int, n: int, extra: list[str]) -> Any:
+    """``imageform depth --disparity`` of one pair with the CLI's rig file (None: it failed)."""
+    from imageform.cli import main
+
+    out = rig.parent / "d.npy"
+    argv = ["depth", str(pair[0]), str(pair[1]), "--camera", str(rig), "--disparity"]
+    argv += ["--min-disparity", str(lo), "--num-disparities", str(n), "-o", str(out), "--force"]
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        code = main([*argv, *extra])
+    return np.load(out) if code == 0 else None
 
 
 # ------------------------------------------------------------------ matching
@@ -417,7 +429,8 @@ def _board_set(name: str, folder: Path, spec: tuple[Any, ...], runs: int) -> dic
     err_cv = _rect_error(
         det["left"], det["right"], (cv["K1"], cv["D1"], cv["K2"], cv["D2"]), cvrect
     )
-    cli = _cli(folder, lg, rg, board, square)
+    tmpdir = tempfile.TemporaryDirectory()
+    cli = _cli(folder, lg, rg, board, square, Path(tmpdir.name))
     # matching on every used pair
     map_l = rectification_map(ours.left.K, ours.left.distortion, rect.R1, rect.P1, size)
     map_r = rectification_map(ours.right.K, ours.right.distortion, rect.R2, rect.P2, size)
@@ -457,8 +470,18 @@ def _board_set(name: str, folder: Path, spec: tuple[Any, ...], runs: int) -> dic
         for k, f in mirrored.items():
             lr[k].append(_lr_share(np.where(region, maps[k], np.nan), _mirror(f, L, R, lo, n)))
         agree.append(_agree(maps["imageform"], maps["OpenCV SGBM MODE_HH"]))
+    # the command line end to end: its rig file, imageform depth on the first pair
+    cli_scores = []
+    if cli is not None:
+        for extra in ([], ["--census-threshold", f"{THRESHOLD:g}"]):
+            d = _cli_depth(det["used"][0], Path(tmpdir.name) / "rig.toml", lo, n, extra)
+            cli_scores.append(None if d is None else _score(d, items[0][2], items[0][3]))
+    tmpdir.cleanup()
     t_ours, t_cv = _time([(L, R) for L, R, *_ in items[:2]], lo, n, runs)
     return {
+        "cli_depth": cli_scores,
+        "first": scores["imageform"][0],
+        "first_thr": scores[f"imageform census_threshold {THRESHOLD:g}"][0],
         "half": half, "size": size, "pairs": len(det["used"]), "total": len(det["used"]) +
         det["skipped"], "ours": ours, "cv": cv, "angle": ang, "err_ours": err_ours,
         "err_cv": err_cv, "cli": cli, "lo": lo, "n": n, "scores": scores, "lr": lr,
@@ -672,6 +695,32 @@ def main() -> None:
                 f"{100 * np.nanmean(a[:, 1]):.2f} % ({100 * np.nanmax(a[:, 1]):.1f} %) | "
                 f"{100 * np.nanmean(a[:, 2]):.2f} % | {np.nanmean(a[:, 3]):.3f} | "
                 f"{np.nanmedian(a[:, 4]):+.3f} | {lr} | {ag} |"
+            )
+    lines += [
+        "",
+        "The command line end to end on each board set's first pair: imageform stereo-calibrate's "
+        "rig file, imageform depth --disparity (the same range; its rectified images are "
+        "float, the table's above 8-bit), against the board plane; beside it the function's "
+        "figures on that pair above:",
+        "",
+        "| set | options | density | > 1 px | > 3 px | MAE px | function: density | > 1 px |",
+        "|---|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    for name, r in boards.items():
+        for extra, sc, ref in zip(
+            ("defaults", f"--census-threshold {THRESHOLD:g}"),
+            r["cli_depth"],
+            (r["first"], r["first_thr"]),
+            strict=False,
+        ):
+            cells = (
+                "failed | | | "
+                if sc is None
+                else f"{100 * sc[0]:.1f} % | {100 * sc[1]:.2f} % | {100 * sc[2]:.2f} % | "
+                f"{sc[3]:.3f}"
+            )
+            lines.append(
+                f"| {name} | {extra} | {cells} | {100 * ref[0]:.1f} % | {100 * ref[1]:.2f} % |"
             )
     scenes = {k: r for k, r in results.items() if "rows" in r}
     if scenes:
