@@ -123,6 +123,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "stain-artefacts": "benchmarks/check_stain_artefacts.py",
     "stain-real": "benchmarks/check_stain_real.py",
     "stereo-depth": "benchmarks/check_stereo_depth.py",
+    "stereo-fresh": "benchmarks/check_stereo_fresh.py",
     "stereo-vertical": "benchmarks/check_stereo_vertical.py",
     "track": "benchmarks/bench_track.py",
     "twin-loop": "benchmarks/check_twin_loop.py",

@@ -136,6 +136,25 @@ def test_depth_subpixel_and_median_options(files: tuple[Path, StereoScene], tmp_
     assert main([*base, "--subpixel", "cubic", "-o", str(tmp_path / "x.npy")]) == 2
 
 
+def test_depth_census_threshold_option(files: tuple[Path, StereoScene], tmp_path: Path) -> None:
+    """--census-threshold reaches stereo_disparity: the map is the function's on the same
+    rectified pair with that threshold (it differs from the plain census's), 0 is the
+    default, and a negative threshold exits 2."""
+    d, _ = files
+    base = ["depth", str(d / "left.png"), str(d / "right.png"), "--camera", str(d / "rig.toml")]
+    base += ["--num-disparities", "48", "--disparity"]
+    maps = []
+    for extra in ([], ["--census-threshold", "0"], ["--census-threshold", "3"]):
+        out = tmp_path / f"c{len(maps)}.npy"
+        assert main([*base, *extra, "-o", str(out)]) == 0
+        maps.append(np.load(out))
+    np.testing.assert_array_equal(maps[0], maps[1])
+    assert not np.array_equal(maps[0], maps[2], equal_nan=True)
+    both = np.isfinite(maps[0]) & np.isfinite(maps[2])
+    assert both.mean() > 0.5 and np.median(np.abs(maps[0][both] - maps[2][both])) < 0.1
+    assert main([*base, "--census-threshold", "-1", "-o", str(tmp_path / "x.npy")]) == 2
+
+
 #: the vertical rig: the right camera 60 mm below the left (or above: y negated), turned 2 deg
 R_VERT = np.asarray(rvec_to_matrix([0.02, 0.01, -0.03]))
 T_VERT = np.array([1.5, -60.0, 2.0])

@@ -62,8 +62,12 @@ def popcount64(v):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
 
 
 @njit
-def census(img, r):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
-    """Census codes ``uint64 (H, W)`` of ``img`` (float32, H x W) over a ``2r+1`` window."""
+def census(img, r, threshold):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    """Census codes ``uint64 (H, W)`` of ``img`` (float32, H x W) over a ``2r+1`` window.
+
+    A neighbour's bit is set where it is darker than the centre by more than ``threshold``
+    (float32, >= 0; 0 is the plain census).
+    """
     h, w = img.shape
     pad = np.empty((h + 2 * r, w + 2 * r), dtype=np.float32)  # the border replicated
     for yy in range(h + 2 * r):
@@ -75,7 +79,7 @@ def census(img, r):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     one = np.uint64(1)
     for y in range(h):
         code = out[y]
-        c = img[y]
+        c = img[y] - threshold  # float32: the twin's arithmetic
         for dy in range(-r, r + 1):
             nb = pad[y + r + dy]
             for dx in range(-r, r + 1):
