@@ -745,3 +745,18 @@ def test_a_rectangle_gets_roi_along_its_long_sides() -> None:
         assert rois[side].width <= 48  # 60 % of the bar's box (81 px) across, not 64
     f50 = crossing(lambda f: gauss_truth(f, 0.8, 5.0), 0.5)
     assert slanted_edge_sfr(img, rois["left"].roi).mtf50[0] == pytest.approx(f50, rel=0.02)
+
+
+def test_every_found_roi_of_a_colour_image_is_measured() -> None:
+    # the e-SFR of an RGB image fits and projects each channel on its own: a red square on
+    # white has no edge in red, and a small ROI's channel may cross too few phases in the
+    # rows the luminance keeps; the finder tested the luminance only and gave ROIs that
+    # slanted_edge_sfr refused (`imageform sfr` then stopped on the whole image)
+    grey = render_sfr_chart((160, 320), grid=(1, 2), angle_deg=5.0, sigma=0.8, supersampling=4)
+    rgb = np.stack([grey, grey, grey], axis=2)
+    rgb[:, :160, 0] = grey.max()  # the left square is red: no edge in R
+    rois = find_slanted_edges(rgb)
+    assert len(rois) == 4 and all(r.center[0] > 160 for r in rois)
+    for roi in rois:
+        assert np.isfinite(slanted_edge_sfr(rgb, roi.roi).mtf50).all()
+    assert len(find_slanted_edges(rgb[..., 1])) == 8  # both squares in one channel

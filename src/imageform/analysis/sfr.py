@@ -1037,19 +1037,20 @@ def find_slanted_edges(
             for roi in rois:
                 if lo_a <= abs(roi.angle) <= hi_a and _clean(gg, t, roi):
                     _keep(best, roi, _level_offset(gg, roi, t))
-    found = [roi for _score, roi in best if _measurable(g, roi)]
+    found = [roi for _score, roi in best if _measurable(g, roi, img)]
     if not found:  # an edge crop (sfrmat's input): the whole image as one ROI
-        whole = _whole_image_edge(g)
+        whole = _whole_image_edge(g, img)
         if whole is not None and lo_a <= abs(whole.angle) <= hi_a:
             found = [whole]
     if not found:  # an edge across the field (an X-ray edge phantom): shapes on the border
-        found = _border_edges(g, levels, msz, lo_a, hi_a, frac, rw)
+        found = _border_edges(g, img, levels, msz, lo_a, hi_a, frac, rw)
     found.sort(key=lambda r: (round(r.center[1]), r.center[0]))
     return found
 
 
 def _border_edges(
     g: np.ndarray,
+    img: np.ndarray,
     levels: Sequence[float],
     msz: int,
     lo_a: float,
@@ -1076,7 +1077,7 @@ def _border_edges(
                     cands.append((along, _level_offset(gg, roi, t), roi))
     out: list[SlantedEdgeROI] = []
     for _along, _score, roi in sorted(cands, key=lambda c: (-c[0], c[1])):
-        if not any(_on_line(o, roi) for o in out) and _measurable(g, roi):
+        if not any(_on_line(o, roi) for o in out) and _measurable(g, roi, img):
             out.append(roi)
     return out
 
@@ -1284,8 +1285,12 @@ def _keep(best: list[tuple[float, SlantedEdgeROI]], roi: SlantedEdgeROI, score: 
     best.append((score, roi))
 
 
-def _measurable(g: np.ndarray, roi: SlantedEdgeROI) -> bool:
+def _measurable(g: np.ndarray, roi: SlantedEdgeROI, img: np.ndarray | None = None) -> bool:
     """Whether the ROI holds one edge the e-SFR measures, at the threshold fit's angle.
+
+    ``g`` is the luminance, ``img`` the image (RGB: each channel is fitted and projected on
+    its own, as :func:`slanted_edge_sfr` does, so a channel without the edge, or one whose
+    edge crosses too few phases in the rows the luminance keeps, fails the ROI).
 
     One edge: every line across it crosses the levels a quarter and three quarters of the
     way between the ROI's two greys (its 5th and 95th percentiles) once, so that no other
@@ -1302,14 +1307,15 @@ def _measurable(g: np.ndarray, roi: SlantedEdgeROI) -> bool:
         if not _clean(g, level, roi):
             return False
     try:  # the e-SFR's steps up to the LSF (its spectrum is not needed here)
-        orientation, _r, _c, fits, _e, _l = _edge_stages(a, a, 4, 1, "central")
+        planes = a if img is None else roi.crop(img)
+        orientation, _r, _c, fits, _e, _l = _edge_stages(planes, a, 4, 1, "central")
     except (DegenerateConfigurationError, InvalidInputError):
         return False
     angle = math.degrees(math.atan(float(fits[-1][0])))
     return orientation == roi.orientation and abs(angle - roi.angle) <= _MAX_ANGLE_GAP
 
 
-def _whole_image_edge(g: np.ndarray) -> SlantedEdgeROI | None:
+def _whole_image_edge(g: np.ndarray, img: np.ndarray | None = None) -> SlantedEdgeROI | None:
     """Return the whole image as one ROI if it is a crop around one slanted edge, else None.
 
     The e-SFR's own fit gives the orientation and angle; :func:`_measurable`'s test then
@@ -1336,7 +1342,7 @@ def _whole_image_edge(g: np.ndarray) -> SlantedEdgeROI | None:
         side = "bottom" if dark_first else "top"
         center = (mid, across)
     roi = SlantedEdgeROI(0, 0, W, H, r.angle, r.orientation, side, center)
-    return roi if _measurable(g, roi) else None
+    return roi if _measurable(g, roi, img) else None
 
 
 def _outline_rois(
