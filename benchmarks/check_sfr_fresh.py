@@ -277,29 +277,35 @@ def main() -> None:
             cells: list[str] = [path.name, str(k), ",".join(map(str, roi.roi)), roi.side]
             try:
                 r = slanted_edge_sfr(lin, roi.roi)
-                f3, m3, a3 = sfrmat3(lin[y : y + h, x : x + w])
+            except Exception as e:  # imageform refuses an ROI its own finder gave
+                rows.append(cells + [f"{type(e).__name__}: {e}"] + [""] * 7)
+                continue
+            m_if = float(r.mtf50[-1])
+            crop = lin[y : y + h, x : x + w]
+            try:
+                f3, m3, a3 = sfrmat3(crop)
                 m_s3 = crossing(f3, m3, 0.5)
-                m_if = float(r.mtf50[-1])
-                ratios.append(
-                    (m_if / m_s3, m_s3, m_if / _sfrmat3_at(lin[y : y + h, x : x + w], r.angle))
-                )
-                try:  # the pixel values as they are: the edge may move too little in them
-                    m_raw = _fmt(float(slanted_edge_sfr(raw, roi.roi).mtf50[-1]))
-                except Exception as e:
-                    m_raw = type(e).__name__
-                m_at = m_if / ratios[-1][2]
-                cells += [
-                    _fmt(abs(r.angle), 2),
-                    _fmt(abs(a3), 2),
-                    _fmt(m_if),
-                    _fmt(m_s3),
-                    _fmt(m_if / m_s3, 3),
-                    _fmt(m_if / m_at, 3),
-                    m_raw,
-                    str(_border(roi.roi, lin.shape)),
-                ]
+                at = m_if / _sfrmat3_at(crop, r.angle)
+            except Exception as e:  # the reference re-implementation fails on its own
+                a3 = m_s3 = at = math.nan
+                s3_note = f"S3: {type(e).__name__}"
+            else:
+                s3_note = ""
+            ratios.append((m_if / m_s3, m_s3, at))
+            try:  # the pixel values as they are: the edge may move too little in them
+                m_raw = _fmt(float(slanted_edge_sfr(raw, roi.roi).mtf50[-1]))
             except Exception as e:
-                cells += [f"{type(e).__name__}: {e}"] + [""] * 7
+                m_raw = type(e).__name__
+            cells += [
+                _fmt(abs(r.angle), 2),
+                _fmt(abs(a3), 2),
+                _fmt(m_if),
+                s3_note or _fmt(m_s3),
+                _fmt(m_if / m_s3, 3),
+                _fmt(at, 3),
+                m_raw,
+                str(_border(roi.roi, lin.shape)),
+            ]
             rows.append(cells)
     title = "Slanted-edge e-SFR on fresh real images" + (f": {args.title}" if args.title else "")
     text = header(title)
