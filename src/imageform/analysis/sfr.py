@@ -1043,7 +1043,9 @@ def find_slanted_edges(
         if whole is not None and lo_a <= abs(whole.angle) <= hi_a:
             found = [whole]
     if not found:  # an edge across the field (an X-ray edge phantom): shapes on the border
-        found = _border_edges(g, img, levels, msz, lo_a, hi_a, frac, rw)
+        # the middle and the quartiles: an edge across the field is one contrast, with no
+        # grey surround of its own to separate (what the 16 levels are for)
+        found = _border_edges(g, img, [levels[0], levels[4], levels[12]], msz, lo_a, hi_a, frac, rw)
     found.sort(key=lambda r: (round(r.center[1]), r.center[0]))
     return found
 
@@ -1211,8 +1213,9 @@ def _clean(g: np.ndarray, t: float, roi: SlantedEdgeROI) -> bool:
     a = g[roi.y : roi.y + roi.height, roi.x : roi.x + roi.width]
     if roi.orientation == "horizontal":
         a = a.T
-    if a.shape[0] >= 3:
-        mid = np.median(np.stack((a[:-2], a[1:-1], a[2:])), axis=0)
+    if a.shape[0] >= 3:  # the median of three: max(min(p, q), min(max(p, q), r))
+        p, q, r = a[:-2], a[1:-1], a[2:]
+        mid = np.maximum(np.minimum(p, q), np.minimum(np.maximum(p, q), r))
         a = np.concatenate((a[:1], mid, a[-1:]))
     d = a < t
     changes = np.count_nonzero(np.diff(d.astype(np.int8), axis=1), axis=1)
