@@ -720,8 +720,8 @@ def test_a_speck_does_not_hide_an_edge() -> None:
     specked[90, 8] = 0.8  # a light one on the dark side
     (roi,) = find_slanted_edges(specked)
     assert roi.crop(specked).shape == img.shape
-    # a second edge several lines long still drops the crop (test_an_edge_crop_is_found_whole
-    # has the bar), as does a speck three lines tall in every third line's neighbourhood
+    # a mark three lines tall survives the median of three lines and still drops the crop
+    # (a second edge, a bar: test_an_edge_crop_is_found_whole)
     streak = img.copy()
     streak[40:43, 70] = 0.2
     assert find_slanted_edges(streak) == []
