@@ -118,6 +118,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "report": "benchmarks/bench_report.py",
     "sfr": "benchmarks/bench_sfr.py",
     "sfr-real": "benchmarks/check_sfr_real.py",
+    "sfr-fresh": "benchmarks/check_sfr_fresh.py",
     "stain": "benchmarks/bench_stain.py",
     "stain-glass": "benchmarks/check_stain_glass.py",
     "stain-artefacts": "benchmarks/check_stain_artefacts.py",

@@ -672,3 +672,91 @@ def test_light_squares_on_a_dark_surround_are_found() -> None:
     # both polarities in one image: each half's 24 edges
     both = np.concatenate([img, 1.0 - img], axis=1)
     assert len(find_slanted_edges(both)) == 48
+
+
+def _phantom_band(angle: float = 6.0, sigma: float = 1.0) -> np.ndarray:
+    """A dark band across a 240 x 400 field, edges at rows ~80 and ~160 (an X-ray phantom's)."""
+    h, w = 240, 400
+    # light above row 80 (an edge with dark above, flipped) and light below row 160
+    top = render_slanted_edge(
+        (h, w), angle_deg=-angle, sigma=sigma, orientation="horizontal", center=(199.5, h - 81)
+    )[::-1]
+    bottom = render_slanted_edge(
+        (h, w), angle_deg=angle, sigma=sigma, orientation="horizontal", center=(199.5, 160)
+    )
+    return top + bottom - 0.2
+
+
+def test_an_edge_across_the_field_is_found() -> None:
+    # an X-ray detector's edge phantom (IEC 62220-1-1) or a knife edge spans the field: its
+    # shapes touch the border, where squares are not looked for, and the image holds two
+    # edges (no edge crop); the straight runs of their outlines give one ROI per edge, in the
+    # middle, no longer than keeps the edge within the middle half of the ROI's width
+    img = _phantom_band()
+    assert img[[40, 120, 200], 200].round(2).tolist() == [0.8, 0.2, 0.8]
+    rois = find_slanted_edges(img)
+    assert [r.orientation for r in rois] == ["horizontal", "horizontal"]
+    f50 = crossing(lambda f: gauss_truth(f, 1.0, 6.0), 0.5)
+    for roi, row in zip(rois, (80, 160), strict=True):
+        assert abs(roi.angle) == pytest.approx(6.0, abs=0.1)
+        assert roi.center[0] == pytest.approx(199.5, abs=40)
+        assert roi.center[1] == pytest.approx(row, abs=4)
+        drift = roi.width * math.tan(math.radians(6.0))
+        assert drift <= 0.5 * roi.height + 1
+        assert slanted_edge_sfr(img, roi.roi).mtf50[0] == pytest.approx(f50, rel=0.02)
+    # one ROI per edge however many levels and runs see it; noise and specks change nothing
+    noisy = img + np.random.default_rng(3).normal(0.0, 0.01, img.shape)
+    assert len(find_slanted_edges(noisy)) == 2
+    # a chart's squares still come first: the band beside a square adds nothing
+    assert find_slanted_edges(np.zeros((50, 50)) + 0.5) == []
+
+
+def test_a_speck_does_not_hide_an_edge() -> None:
+    # a dust speck or hot pixel one line tall in the flat area of an edge crop crossed the
+    # 1/4 and 3/4 levels twice on its line, and the crop was no longer taken as one edge
+    img = render_slanted_edge((120, 80), angle_deg=5.0, sigma=0.8)
+    specked = img.copy()
+    specked[30, 70] = 0.2  # a dark speck on the light side
+    specked[90, 8] = 0.8  # a light one on the dark side
+    (roi,) = find_slanted_edges(specked)
+    assert roi.crop(specked).shape == img.shape
+    # a mark three lines tall survives the median of three lines and still drops the crop
+    # (a second edge, a bar: test_an_edge_crop_is_found_whole)
+    streak = img.copy()
+    streak[40:43, 70] = 0.2
+    assert find_slanted_edges(streak) == []
+
+
+def test_a_rectangle_gets_roi_along_its_long_sides() -> None:
+    # a long dark bar (the ISO 12233 chart's slanted bars, a rectangle on MITRE's test edge):
+    # its long sides' ROIs are half the side, not half the side of a square of equal area
+    h, w = 320, 200
+    # light left of u = 70 (an edge mirrored), light right of u = 130: a 60-px bar between
+    left = render_slanted_edge((h, w), angle_deg=-5.0, sigma=0.8, center=(w - 1 - 70, 160))
+    right = render_slanted_edge((h, w), angle_deg=5.0, sigma=0.8, center=(130, 160))
+    img = left[:, ::-1] + right - 0.2
+    img[:40] = 0.8  # 240 rows long
+    img[280:] = 0.8
+    assert img[160, [40, 100, 160]].round(2).tolist() == [0.8, 0.2, 0.8]
+    rois = {r.side: r for r in find_slanted_edges(img, max_angle=10)}
+    assert {"left", "right"} <= set(rois)
+    for side in ("left", "right"):
+        assert rois[side].height >= 100  # half of the 240-row side, not ~60
+        assert rois[side].width <= 48  # 60 % of the bar's box (81 px) across, not 64
+    f50 = crossing(lambda f: gauss_truth(f, 0.8, 5.0), 0.5)
+    assert slanted_edge_sfr(img, rois["left"].roi).mtf50[0] == pytest.approx(f50, rel=0.02)
+
+
+def test_every_found_roi_of_a_colour_image_is_measured() -> None:
+    # the e-SFR of an RGB image fits and projects each channel on its own: a red square on
+    # white has no edge in red, and a small ROI's channel may cross too few phases in the
+    # rows the luminance keeps; the finder tested the luminance only and gave ROIs that
+    # slanted_edge_sfr refused (`imageform sfr` then stopped on the whole image)
+    grey = render_sfr_chart((160, 320), grid=(1, 2), angle_deg=5.0, sigma=0.8, supersampling=4)
+    rgb = np.stack([grey, grey, grey], axis=2)
+    rgb[:, :160, 0] = grey.max()  # the left square is red: no edge in R
+    rois = find_slanted_edges(rgb)
+    assert len(rois) == 4 and all(r.center[0] > 160 for r in rois)
+    for roi in rois:
+        assert np.isfinite(slanted_edge_sfr(rgb, roi.roi).mtf50).all()
+    assert len(find_slanted_edges(rgb[..., 1])) == 8  # both squares in one channel

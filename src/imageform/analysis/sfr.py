@@ -100,6 +100,10 @@ _N_LEVELS = 16
 _MAX_BEND_RMS = 0.5
 #: largest difference (deg) between the threshold fit's and the e-SFR's angle of a found edge
 _MAX_ANGLE_GAP = 1.0
+#: a dark shape whose bounding box is this many times longer one way is a rectangle
+_RECTANGLE = 1.25
+#: the sides of a dark shape seen along the rows (a vertical edge)
+_VERTICAL = ("left", "right")
 _MAX_CORRECTION = 10.0
 
 
@@ -838,9 +842,12 @@ Components = list[tuple[int, int, np.ndarray]]
 
 
 def _components_at(
-    g: np.ndarray, t: float, msz: int, *, kernel: bool | None = None
+    g: np.ndarray, t: float, msz: int, *, kernel: bool | None = None, border: bool = False
 ) -> tuple[Components, Components]:
     """Components of ``g < t`` and of ``g > t`` at least ``msz`` px across, off the border.
+
+    With ``border`` the components that touch the image's border instead (at least ``msz``
+    px across).
 
     Returns the dark and the light components, ``(r0, c0, mask)`` each: the top-left pixel
     in ``g`` and the mask over its bounding box (4-connected labelling), in the order of
@@ -859,7 +866,8 @@ def _components_at(
 
         for runs, comp, boxes in level_runs(np.ascontiguousarray(g, dtype=np.float64), float(t)):
             r0, r1, c0, c1 = boxes.T
-            ok = (r0 > 0) & (c0 > 0) & (r1 < H) & (c1 < W) & (np.minimum(r1 - r0, c1 - c0) >= msz)
+            off = (r0 > 0) & (c0 > 0) & (r1 < H) & (c1 < W)
+            ok = (~off if border else off) & (np.minimum(r1 - r0, c1 - c0) >= msz)
             sel = np.nonzero(ok)[0]
             masks = paint_runs(runs, comp, sel, boxes) if sel.size else []
             out.append([(int(r0[k]), int(c0[k]), mk) for k, mk in zip(sel, masks, strict=True)])
@@ -873,7 +881,8 @@ def _components_at(
             if sl is None:
                 continue
             r0, r1, c0, c1 = sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
-            if r0 == 0 or c0 == 0 or r1 == H or c1 == W or min(r1 - r0, c1 - c0) < msz:
+            touches = r0 == 0 or c0 == 0 or r1 == H or c1 == W
+            if touches != border or min(r1 - r0, c1 - c0) < msz:
                 continue
             found.append((r0, c0, labels[r0:r1, c0:c1] == lab))
         out.append(found)
@@ -944,9 +953,13 @@ def find_slanted_edges(
     vertical/horizontal is within ``[min_angle, max_angle]`` degrees gets an ROI centred on its
     midpoint, ``roi_length`` of the side long (the middle part, away from the corners; longer,
     up to 80 % of the side, where the edge would not cross one whole pixel along it, else the
-    side is skipped) and ``roi_width`` pixels across (default: 60 % of the side, at most 64);
+    side is skipped; shorter where the edge would drift across more than half the ROI's width)
+    and ``roi_width`` pixels across (default: 60 % of the side, at most 64; a rectangle, its
+    bounding box 1.25 times longer one way, has its sides' lengths from its area and aspect);
     ROIs that leave the image, or in which a row (column) crosses the threshold more than once
-    (another square inside), are dropped. A component seen at several levels (same bounding box
+    (another square inside; each pixel is first the median of itself and its neighbours on
+    the two adjacent lines, so that a speck or a noise spike one line tall is no edge), are
+    dropped. A component seen at several levels (same bounding box
     within 2 px) is fitted once, at the level nearest the middle of its grey and its surround's;
     of the ROIs that several components give on one edge, the one whose level is nearest the
     middle of the edge's two greys is kept. Light squares on a darker surround are searched the
@@ -958,7 +971,10 @@ def find_slanted_edges(
     accepts it and finds the edge within 1 deg of the threshold fit. If no square gives an edge
     and the whole image passes that test with an angle in range, the image is taken as an edge
     crop (the input of ``sfrmat``) and returned as one ROI (its ``side`` names the side of the
-    dark area the edge bounds).
+    dark area the edge bounds). If that fails too, the shapes that touch the image's border
+    (an edge across the whole field: an X-ray detector's edge phantom, IEC 62220-1-1, or a
+    knife edge; the squares' search skips them) give the straight runs of their outlines, as
+    a wedge's below, one ROI per edge line (the longest).
 
     A dark component that fills less than 60 % of its bounding box (a wedge, such as the
     blades of the ISO 12233:2017/2023 chart's pinwheels) is no square: its outline seen from
@@ -1007,22 +1023,82 @@ def find_slanted_edges(
             if m.sum() < 0.6 * hh * ww:  # not a square: the straight runs of its outline
                 rois = _outline_rois(gg, m, t, (r0, c0), msz, hi_a, frac, rw)
             else:
+                # a rectangle's sides (a box 1.25 times longer one way than the other): sqrt(area)
+                # scaled by the box's aspect; a square's: sqrt(area)
                 side = math.sqrt(float(m.sum()))
+                aspect = hh / ww if max(hh, ww) >= _RECTANGLE * min(hh, ww) else 1.0
+                tall = side * math.sqrt(aspect), side / math.sqrt(aspect)
                 found_sides = [
-                    _side_roi(gg, o, t, (r0, c0), name, side, frac, rw)
+                    _side_roi(gg, o, t, (r0, c0), name, tall if name in _VERTICAL else tall[::-1],
+                              frac, rw)
                     for name, o in _outlines(m).items()
-                ]
+                ]  # fmt: skip
                 rois = [r for r in found_sides if r is not None]
             for roi in rois:
                 if lo_a <= abs(roi.angle) <= hi_a and _clean(gg, t, roi):
                     _keep(best, roi, _level_offset(gg, roi, t))
-    found = [roi for _score, roi in best if _measurable(g, roi)]
+    found = [roi for _score, roi in best if _measurable(g, roi, img)]
     if not found:  # an edge crop (sfrmat's input): the whole image as one ROI
-        whole = _whole_image_edge(g)
+        whole = _whole_image_edge(g, img)
         if whole is not None and lo_a <= abs(whole.angle) <= hi_a:
             found = [whole]
+    if not found:  # an edge across the field (an X-ray edge phantom): shapes on the border
+        # the middle and the quartiles: an edge across the field is one contrast, with no
+        # grey surround of its own to separate (what the 16 levels are for)
+        found = _border_edges(g, img, [levels[0], levels[4], levels[12]], msz, lo_a, hi_a, frac, rw)
     found.sort(key=lambda r: (round(r.center[1]), r.center[0]))
     return found
+
+
+def _border_edges(
+    g: np.ndarray,
+    img: np.ndarray,
+    levels: Sequence[float],
+    msz: int,
+    lo_a: float,
+    hi_a: float,
+    frac: float,
+    rw: int | None,
+) -> list[SlantedEdgeROI]:
+    """ROIs on the straight runs of the outlines of shapes that touch the image's border.
+
+    An edge across the whole field (an X-ray detector's edge phantom, IEC 62220-1-1; a knife
+    edge over half the frame) bounds shapes that touch the border, which the search for
+    squares skips. Their outlines are cut into straight runs as a wedge's are
+    (:func:`_outline_rois`), with the same tests; of the ROIs on one line (noise and the
+    levels split an edge's outline into several runs) the longest is kept.
+    """
+    cands: list[tuple[int, float, SlantedEdgeROI]] = []
+    per_level = [_components_at(g, t, msz, border=True) for t in levels]
+    for k, gg, lv in ((0, g, levels), (1, -g, [-t for t in levels])):
+        seen = [(t, *c) for t, cs in zip(lv, per_level, strict=True) for c in cs[k]]
+        for t, r0, c0, m in _pick_levels(gg, seen):
+            for roi in _outline_rois(gg, m, t, (r0, c0), msz, hi_a, frac, rw):
+                if lo_a <= abs(roi.angle) <= hi_a and _clean(gg, t, roi):
+                    along = roi.height if roi.orientation == "vertical" else roi.width
+                    cands.append((along, _level_offset(gg, roi, t), roi))
+    out: list[SlantedEdgeROI] = []
+    for _along, _score, roi in sorted(cands, key=lambda c: (-c[0], c[1])):
+        if not any(_on_line(o, roi) for o in out) and _measurable(g, roi, img):
+            out.append(roi)
+    return out
+
+
+def _on_line(a: SlantedEdgeROI, b: SlantedEdgeROI) -> bool:
+    """Whether ``b`` lies on ``a``'s edge line.
+
+    One orientation, angles within 2 deg, and ``b``'s centre off ``a``'s line by less than a
+    quarter of the narrower ROI's width (the levels place a blurred edge's crossings a few
+    pixels apart; a second edge that near could not be measured in either ROI).
+    """
+    if a.orientation != b.orientation or abs(a.angle - b.angle) > 2.0:
+        return False
+    i = 0 if a.orientation == "vertical" else 1  # across the edge: u for a vertical one
+    wa, wb = (a.width, b.width) if i == 0 else (a.height, b.height)
+    slope = math.tan(math.radians(a.angle))
+    across = a.center[i] + slope * (b.center[1 - i] - a.center[1 - i])
+    off = abs(b.center[i] - across) * math.cos(math.radians(a.angle))
+    return off <= max(3.0, 0.25 * min(wa, wb))
 
 
 def _outline(m: np.ndarray, name: str, kernel: bool | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -1071,11 +1147,16 @@ def _side_roi(
     t: float,
     origin: tuple[int, int],
     name: str,
-    side: float,
+    side: float | tuple[float, float],
     frac: float,
     rw: int | None,
 ) -> SlantedEdgeROI | None:
-    """Return the ROI on side ``name`` of a component (its mask ``m`` or its :func:`_outline`)."""
+    """Return the ROI on side ``name`` of a component (its mask ``m`` or its :func:`_outline`).
+
+    ``side`` is the side's length, or its length and the shape's extent across it (a
+    rectangle's other side): the ROI is ``frac`` of the first long and 60 % of the second
+    wide (at most 64 px), and no longer than lets the edge drift across half its width.
+    """
     vertical = name in ("left", "right")
     gg = g if vertical else g.T
     o_line, o_across = origin if vertical else origin[::-1]
@@ -1098,14 +1179,17 @@ def _side_roi(
     angle = math.degrees(math.atan(b))
     mid_line = 0.5 * (lines[0] + lines[-1]) + o_line
     mid_across = a + b * mid_line
-    length = max(8, round(frac * side))
+    along, across = (side, side) if isinstance(side, float | int) else side
+    width = rw if rw is not None else max(16, min(64, round(0.6 * across)))
+    # a long side at a steep angle: the edge would run from one side of the ROI to the other
+    # (an X-ray edge phantom across the field); keep it within the middle half of the width
+    length = max(8, min(round(frac * along), math.floor(0.5 * width / max(abs(b), 1e-9))))
     # the e-SFR needs the edge to cross at least one pixel along the ROI (a phase cycle)
     need = math.ceil(1.0 / max(abs(b), 1e-9)) + 2
     if need > length:
-        if need > 0.8 * side:
+        if need > 0.8 * along:
             return None
         length = need
-    width = rw if rw is not None else max(16, min(64, round(0.6 * side)))
     l0 = round(mid_line - (length - 1) / 2.0)
     a0 = round(mid_across - (width - 1) / 2.0)
     H, W = g.shape if vertical else g.shape[::-1]
@@ -1119,10 +1203,21 @@ def _side_roi(
 
 
 def _clean(g: np.ndarray, t: float, roi: SlantedEdgeROI) -> bool:
-    """One crossing of the level ``t`` per line across the edge inside the ROI."""
-    d = g[roi.y : roi.y + roi.height, roi.x : roi.x + roi.width] < t
+    """One crossing of the level ``t`` per line across the edge inside the ROI.
+
+    Each pixel is first replaced by the median of itself and its neighbours on the two
+    adjacent lines (along the edge): a speck of dust, a hot pixel or a noise spike one line
+    tall is no second edge, where another edge, a glyph or a line along the edge (several
+    lines long) still crosses the level.
+    """
+    a = g[roi.y : roi.y + roi.height, roi.x : roi.x + roi.width]
     if roi.orientation == "horizontal":
-        d = d.T
+        a = a.T
+    if a.shape[0] >= 3:  # the median of three: max(min(p, q), min(max(p, q), r))
+        p, q, r = a[:-2], a[1:-1], a[2:]
+        mid = np.maximum(np.minimum(p, q), np.minimum(np.maximum(p, q), r))
+        a = np.concatenate((a[:1], mid, a[-1:]))
+    d = a < t
     changes = np.count_nonzero(np.diff(d.astype(np.int8), axis=1), axis=1)
     return bool((changes == 1).all())
 
@@ -1193,8 +1288,12 @@ def _keep(best: list[tuple[float, SlantedEdgeROI]], roi: SlantedEdgeROI, score: 
     best.append((score, roi))
 
 
-def _measurable(g: np.ndarray, roi: SlantedEdgeROI) -> bool:
+def _measurable(g: np.ndarray, roi: SlantedEdgeROI, img: np.ndarray | None = None) -> bool:
     """Whether the ROI holds one edge the e-SFR measures, at the threshold fit's angle.
+
+    ``g`` is the luminance, ``img`` the image (RGB: each channel is fitted and projected on
+    its own, as :func:`slanted_edge_sfr` does, so a channel without the edge, or one whose
+    edge crosses too few phases in the rows the luminance keeps, fails the ROI).
 
     One edge: every line across it crosses the levels a quarter and three quarters of the
     way between the ROI's two greys (its 5th and 95th percentiles) once, so that no other
@@ -1211,14 +1310,15 @@ def _measurable(g: np.ndarray, roi: SlantedEdgeROI) -> bool:
         if not _clean(g, level, roi):
             return False
     try:  # the e-SFR's steps up to the LSF (its spectrum is not needed here)
-        orientation, _r, _c, fits, _e, _l = _edge_stages(a, a, 4, 1, "central")
+        planes = a if img is None else roi.crop(img)
+        orientation, _r, _c, fits, _e, _l = _edge_stages(planes, a, 4, 1, "central")
     except (DegenerateConfigurationError, InvalidInputError):
         return False
     angle = math.degrees(math.atan(float(fits[-1][0])))
     return orientation == roi.orientation and abs(angle - roi.angle) <= _MAX_ANGLE_GAP
 
 
-def _whole_image_edge(g: np.ndarray) -> SlantedEdgeROI | None:
+def _whole_image_edge(g: np.ndarray, img: np.ndarray | None = None) -> SlantedEdgeROI | None:
     """Return the whole image as one ROI if it is a crop around one slanted edge, else None.
 
     The e-SFR's own fit gives the orientation and angle; :func:`_measurable`'s test then
@@ -1245,7 +1345,7 @@ def _whole_image_edge(g: np.ndarray) -> SlantedEdgeROI | None:
         side = "bottom" if dark_first else "top"
         center = (mid, across)
     roi = SlantedEdgeROI(0, 0, W, H, r.angle, r.orientation, side, center)
-    return roi if _measurable(g, roi) else None
+    return roi if _measurable(g, roi, img) else None
 
 
 def _outline_rois(
