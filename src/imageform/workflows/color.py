@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
@@ -39,6 +40,7 @@ from imageform.workflows._spec import (
 )
 
 __all__ = [
+    "CHUNKED_CHOICES",
     "CHUNKED_OPTIONS",
     "DISPLAYABLE_SPACES",
     "WORKFLOWS",
@@ -89,6 +91,14 @@ CHUNKED_OPTIONS = MappingProxyType(
             }
         ),
     }
+)
+#: The white-balance methods whose illuminant chunked processing streams (a reduction over
+#: every block, or none: manual); the other methods need the whole image in memory.
+_ChunkedWbMethod = Literal["gray_world", "shades_of_gray", "manual"]
+#: The options whose choices ``imageform chunked COMMAND`` narrows: command -> field -> names
+#: (its ``--help`` lists these alone, and the others are refused).
+CHUNKED_CHOICES: Mapping[str, Mapping[str, tuple[str, ...]]] = MappingProxyType(
+    {"white_balance": MappingProxyType({"method": get_args(_ChunkedWbMethod)})}
 )
 
 # ---------------------------------------------------------------- convert
