@@ -288,7 +288,7 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     """``imageform convert``: one image file from one colour space to another."""
     refuse_absent_device(opts)  # before any file is read
     from imageform.color import SPACES, convert, path
-    from imageform.io import RGB_PROFILED, image_color_space
+    from imageform.io import RGB_PROFILED, image_color_space, image_format
 
     dst = opts.dst
     opts.check_used()  # the output was checked by execute (check_output), before this
@@ -306,14 +306,18 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     fn: Any = lambda band: convert(as_values(band, src), src, dst, **params)  # noqa: E731
     if opts.device == "cuda":
         fn = gpu_bands(run, f"{src} -> {dst} on a {img.dtype} image", fn)
-    tag = dst if dst in RGB_PROFILED else None
+    # an RGB space's ICC profile is embedded; a TIFF in another space (lab, xyz ...) records
+    # its name in the description, so that info and --from auto read it back
+    tiff = image_format(out) == "tiff"
+    tag = dst if dst in RGB_PROFILED or (tiff and dst != "srgb") else None
     n_out, dtype, lo, hi, shape = write_mapped(run, out, img, fn, opts, like=img, color_space=tag)
     summary = {
         "input": image,
         "output": out,
         "from": src,
         "declared": None if declared is None else declared.name,
-        "icc_profile_written": tag not in (None, "srgb"),
+        "icc_profile_written": tag in RGB_PROFILED and tag != "srgb",
+        "color_space_recorded": tag is not None and tag not in RGB_PROFILED,
         "to": dst,
         "path": [e.function for e in edges],
         "shape": list(shape),
@@ -793,7 +797,10 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
         space = f"PNG chunks no space of imageform matches ({declared.description}); read as sRGB"
     elif declared.source in ("png-gama", "png-chrm"):
         space = f"{declared.name} ({declared.description})"
-    how = {"none": ""}.get(declared.source, f" ({declared.source})")
+    how = {
+        "none": "",
+        "tiff-description": " (recorded by imageform in the TIFF's description)",
+    }.get(declared.source, f" ({declared.source})")
     text = [
         f"{image}: {head.format}, {head.width} x {head.height} px, {head.channels} channel(s), "
         f"{head.dtype}",
