@@ -380,10 +380,26 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
         minimum=0,
         maximum=100,
     )
-    p: float = option(6.0, help="shades-of-gray / gray-edge: Minkowski norm p >= 1.")
-    sigma: float = option(1.0, help="gray-edge, grayness-index: Gaussian scale in pixels.")
+    # the bounds are the library's (MAX_MINKOWSKI_P, MAX_SIGMA, Robertson's 600 mired; checked
+    # by tests/cli/test_white_balance_words.py), so that a mistake is named by its flag
+    p: float = option(
+        6.0,
+        help="shades-of-gray / gray-edge: Minkowski norm p, 1 to 10000.",
+        minimum=1.0,
+        maximum=1e4,
+    )
+    sigma: float = option(
+        1.0,
+        help="gray-edge, grayness-index: Gaussian scale in pixels, 0 to 1000.",
+        minimum=0.0,
+        maximum=1000.0,
+    )
     illuminant: str | None = option(None, help="manual: illuminant name, e.g. A, D50, F2.")
-    cct: float | None = option(None, help="manual: correlated colour temperature in kelvin.")
+    cct: float | None = option(
+        None,
+        help="manual: correlated colour temperature in kelvin, 1667 or above.",
+        minimum=1e6 / 600,
+    )
     normalize: _WbNormalize = option(
         "mean",
         help="Keep the mean grey level or the green channel.",
@@ -409,8 +425,10 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
     )
 
     def check(self) -> None:
-        """Check that --chart and --overlay come with --method chart only."""
+        """Check --illuminant, and that --chart and --overlay come with --method chart only."""
         super().check()
+        if self.illuminant is not None:
+            _check_illuminant(self.illuminant)
         if self.chart is not None:
             object.__setattr__(self, "chart", Path(self.chart))
         if normalize_choice(self.method, _WB_METHODS, "--method") != "chart":
@@ -428,6 +446,22 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
             "illuminant": self.illuminant,
             "cct": self.cct,
         }
+
+
+def _check_illuminant(name: str) -> None:
+    """Refuse an ``--illuminant`` that is no white point or RGB space, naming the flag."""
+    from imageform._validate import describe
+    from imageform.color import RGB_SPACES, WHITEPOINTS_XY, resolve_white
+    from imageform.errors import UnknownOptionError
+
+    try:
+        resolve_white(name, name="--illuminant")
+    except UnknownOptionError:
+        names = ", ".join([*WHITEPOINTS_XY[2], *RGB_SPACES])
+        raise UnknownOptionError(
+            f"unknown --illuminant {describe(name, 30)}; valid: an illuminant or RGB space "
+            f"name ({names})"
+        ) from None
 
 
 def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path) -> Result:
