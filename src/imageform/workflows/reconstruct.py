@@ -30,9 +30,9 @@ from imageform.workflows._spec import (
 )
 from imageform.workflows._video import (
     DEINTERLACE_CHOICES,
-    FIELD_ORDER_CHOICES,
     DeinterlaceChoice,
     FieldOrderChoice,
+    field_order_option,
 )
 
 __all__ = ["CAMERA_COLUMNS", "WORKFLOWS", "ReconstructOptions"]
@@ -108,12 +108,7 @@ class ReconstructOptions(Options):
         "or blend.",
         choices=DEINTERLACE_CHOICES,
     )
-    field_order: FieldOrderChoice | None = option(
-        None,
-        help="The field first in time, top or bottom (default: the frames', else the "
-        "stream's, else top).",
-        choices=FIELD_ORDER_CHOICES,
-    )
+    field_order: FieldOrderChoice | None = field_order_option()
     contrast_threshold: float = option(
         0.04,
         help="SIFT's contrast threshold, in (0, 1): 0.01 finds ten times as many keypoints "

@@ -1,0 +1,73 @@
+"""Options two commands share are declared once.
+
+``--field-order`` was declared twice, in ``track`` and ``reconstruct``, with the same words:
+one edit away from two meanings. It is :func:`imageform.workflows._video.field_order_option`
+in both.
+"""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+from pathlib import Path
+
+import click
+import pytest
+
+from imageform.cli._build import build_command
+from imageform.workflows import WORKFLOWS
+
+SRC = Path(__file__).resolve().parents[2] / "src" / "imageform" / "workflows"
+
+
+def _field(command: str, name: str) -> dataclasses.Field:  # type: ignore[type-arg]
+    (f,) = [f for f in WORKFLOWS[command].options.fields() if f.name == name]
+    return f
+
+
+def _param(command: str, flag: str) -> click.Option:
+    (p,) = [
+        p
+        for p in build_command(WORKFLOWS[command]).params
+        if isinstance(p, click.Option) and flag in p.opts
+    ]
+    return p
+
+
+def test_field_order_is_one_option_in_track_and_reconstruct() -> None:
+    track, recon = _field("track", "field_order"), _field("reconstruct", "field_order")
+    assert track.metadata == recon.metadata
+    assert track.default is recon.default is None
+    a, b = _param("track", "--field-order"), _param("reconstruct", "--field-order")
+    assert (a.help, a.metavar, a.default) == (b.help, b.metavar, b.default)
+    assert a.metavar == "[top|bottom]"
+
+
+@pytest.mark.parametrize("module", ["track.py", "reconstruct.py"])
+def test_field_order_is_declared_by_the_shared_option(module: str) -> None:
+    tree = ast.parse((SRC / module).read_text(encoding="utf-8"))
+    (decl,) = [
+        n
+        for n in ast.walk(tree)
+        if isinstance(n, ast.AnnAssign)
+        and isinstance(n.target, ast.Name)
+        and n.target.id == "field_order"
+    ]
+    assert isinstance(decl.value, ast.Call) and isinstance(decl.value.func, ast.Name)
+    assert decl.value.func.id == "field_order_option"
+
+
+@pytest.mark.parametrize("command", ["track", "reconstruct"])
+def test_a_bad_field_order_is_one_usage_line(
+    command: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from imageform.cli import main
+
+    args = [command, "nothere.mp4", "--field-order", "middle", "--camera", "cam.toml"]
+    if command == "track":
+        args += ["--board", "9x6", "--square", "30mm"]
+    assert main(args) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith(
+        f"imageform {command}: error: unknown --field-order 'middle'; valid: top, bottom"
+    ), line
