@@ -71,3 +71,41 @@ def test_a_bad_field_order_is_one_usage_line(
     assert line.startswith(
         f"imageform {command}: error: unknown --field-order 'middle'; valid: top, bottom"
     ), line
+
+
+FOLDER_OUTPUTS = [n for n, wf in WORKFLOWS.items() if wf.output is not None and wf.output.folder]
+
+
+@pytest.mark.parametrize("name", FOLDER_OUTPUTS)
+def test_a_folder_output_says_what_it_holds(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The refusal of a file name for a folder output (``reconstruct -o room.ply``) quotes
+    ``Output.holds``, given by the workflow, where it parsed the option's help text; --help
+    says the same words."""
+    from imageform.cli import main
+    from tests.cli.test_grammar import EXAMPLES
+
+    out = WORKFLOWS[name].output
+    assert out is not None and out.holds
+    assert out.help.startswith(f"Output folder: {out.holds}")
+    args = [name, *(["nothere"] * len(WORKFLOWS[name].inputs)), "-o", str(tmp_path / "x.json")]
+    for f in WORKFLOWS[name].options.fields():
+        if f.default is dataclasses.MISSING:
+            args += [f.metadata.get("flag") or "--" + f.name.replace("_", "-"), EXAMPLES[f.name]]
+    assert main(args) == 1
+    assert capsys.readouterr().err.splitlines() == [
+        f"imageform: error: {name} writes a folder ({out.holds}): give -o a folder name, "
+        "not the file name 'x.json'"
+    ]
+
+
+def test_a_folder_output_without_holds_still_refuses_a_file_name(tmp_path: Path) -> None:
+    from imageform.errors import InvalidInputError
+    from imageform.workflows import Output, execute
+
+    wf = dataclasses.replace(WORKFLOWS["reconstruct"], output=Output("Output folder.", folder=True))
+    with pytest.raises(InvalidInputError, match=r"^reconstruct writes a folder: give -o a folder"):
+        execute(wf, out=tmp_path / "room.ply", frames="nothere")
+    with pytest.raises(TypeError, match="expected holds as a str"):
+        Output("Output folder.", folder=True, holds=None)  # type: ignore[arg-type]

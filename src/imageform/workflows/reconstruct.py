@@ -400,6 +400,9 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     return Result(summary, text)
 
 
+#: What the output folder holds (its --help, and the refusal of a file name for it).
+_HOLDS = "cameras.csv, points.ply, report.html, metrics.json"
+
 WORKFLOWS = (
     Workflow(
         "reconstruct",
@@ -414,10 +417,7 @@ WORKFLOWS = (
                 kind="text",
             ),
         ),
-        Output(
-            "Output folder: cameras.csv, points.ply, report.html, metrics.json (replaced whole).",
-            folder=True,
-        ),
+        Output(f"Output folder: {_HOLDS} (replaced whole).", folder=True, holds=_HOLDS),
         group="geometry",
         description="SIFT keypoints matched between neighbouring frames (--window), each pair "
         "verified by its essential matrix (RANSAC), the pair with the most parallax first, "
