@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -28,9 +29,9 @@ def rgb_png(tmp_path: Path) -> Path:
     return tmp_path / "in.png"
 
 
-def _json(argv: list[str], capsys: pytest.CaptureFixture[str]) -> dict:  # type: ignore[type-arg]
+def _json(argv: list[str], capsys: pytest.CaptureFixture[str]) -> dict[str, Any]:
     assert main([*argv, "--json"]) == 0, capsys.readouterr().err
-    out: dict = json.loads(capsys.readouterr().out)  # type: ignore[type-arg]
+    out: dict[str, Any] = json.loads(capsys.readouterr().out)
     return out
 
 

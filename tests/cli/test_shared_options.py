@@ -10,6 +10,7 @@ from __future__ import annotations
 import ast
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 import click
 import pytest
@@ -20,7 +21,7 @@ from imageform.workflows import WORKFLOWS
 SRC = Path(__file__).resolve().parents[2] / "src" / "imageform" / "workflows"
 
 
-def _field(command: str, name: str) -> dataclasses.Field:  # type: ignore[type-arg]
+def _field(command: str, name: str) -> dataclasses.Field[Any]:
     (f,) = [f for f in WORKFLOWS[command].options.fields() if f.name == name]
     return f
 
@@ -92,7 +93,10 @@ def test_a_folder_output_says_what_it_holds(
     args = [name, *(["nothere"] * len(WORKFLOWS[name].inputs)), "-o", str(tmp_path / "x.json")]
     for f in WORKFLOWS[name].options.fields():
         if f.default is dataclasses.MISSING:
-            args += [f.metadata.get("flag") or "--" + f.name.replace("_", "-"), EXAMPLES[f.name]]
+            args += [
+                f.metadata.get("flag") or "--" + f.name.replace("_", "-"),
+                str(EXAMPLES[f.name]),
+            ]
     assert main(args) == 1
     assert capsys.readouterr().err.splitlines() == [
         f"imageform: error: {name} writes a folder ({out.holds}): give -o a folder name, "
