@@ -125,8 +125,11 @@ def test_errors(tiled: tuple[Path, np.ndarray], tmp_path: Path) -> None:
         UnknownOptionError, match="valid: 'convert', 'stain_normalize', 'white_balance'"
     ):
         process_chunked(src, tmp_path / "o.zarr", "demosaic")
-    with pytest.raises(UnknownOptionError, match="'gray_world', 'manual', 'shades_of_gray'"):
+    streams = "streams the white-balance methods 'gray_world', 'shades_of_gray', 'manual' only"
+    with pytest.raises(UnknownOptionError, match=f"{streams}, got 'white-patch'"):
         process_chunked(src, tmp_path / "o.zarr", "white_balance", {"method": "white-patch"})
+    with pytest.raises(UnknownOptionError, match="valid: 'gray_world', 'manual', 'shades_of_gray'"):
+        process_chunked(src, tmp_path / "o.zarr", "white_balance", {"method": "nope"})
     with pytest.raises(InvalidInputError, match="is the input"):
         process_chunked(src, src, "convert", {"to": "srgb"})
     with pytest.raises(InvalidInputError, match="use float32"):

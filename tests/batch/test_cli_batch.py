@@ -232,8 +232,8 @@ def test_bad_input_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str
                 "--method",
                 "white-patch",
             ],
-            1,
-            "'gray_world', 'manual'",
+            2,  # a usage error: --help lists the three methods chunked processing streams
+            "chunked processing streams gray-world, shades-of-gray, manual",
         ),
     ]
     for argv, code, text in cases:

@@ -276,7 +276,10 @@ def test_calibrate_refinement_option(
     bad = ["calibrate", *map(str, views), "--board", "9x6", "-o", str(tmp_path / "b.toml")]
     assert main([*bad, "--refinement", "sb"]) == 2  # a usage error, as every bad choice
     err = capsys.readouterr().err.strip().splitlines()
-    assert err[-1] == "Error: unknown --refinement 'sb'; valid: symmetric, gradient"
+    assert err == [
+        "imageform calibrate: error: unknown --refinement 'sb'; valid: symmetric, gradient "
+        "(see 'imageform calibrate --help')"
+    ]
     assert not (tmp_path / "b.toml").exists()
 
 

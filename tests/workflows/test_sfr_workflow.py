@@ -248,7 +248,7 @@ def test_sfr_pixel_pitch_on_the_command_line(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """``imageform sfr EDGE --pixel-pitch 5.5um --json``: lp/mm in the JSON; a bad pitch is
-    bad usage (exit 2, click's usage lines, then one line saying why), nothing written."""
+    bad usage (exit 2, one line saying why and where the options are listed), nothing written."""
     import json
 
     from imageform.cli import main
@@ -262,5 +262,7 @@ def test_sfr_pixel_pitch_on_the_command_line(
     out = tmp_path / "sfr.csv"
     assert main(["sfr", str(src), "--pixel-pitch", "-1", "-o", str(out)]) == 2  # bad usage
     err = capsys.readouterr().err
-    assert err.strip().splitlines()[-1] == "Error: expected --pixel-pitch > 0, got '-1'"
+    assert err.strip().splitlines() == [
+        "imageform sfr: error: expected --pixel-pitch > 0, got '-1' (see 'imageform sfr --help')"
+    ]
     assert not out.exists()

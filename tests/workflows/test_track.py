@@ -209,7 +209,9 @@ def test_bad_options(
 ) -> None:
     assert main(_base(tmp_path, clip) + extra) == 2  # bad usage, before anything is read
     err = capsys.readouterr().err
-    assert f"Error: {words}" in err or (words in err.splitlines()[-1]), err
+    (line,) = err.strip().splitlines()  # one line: the command, the reason, where help is
+    assert line.startswith("imageform track: error: ") and words in line, err
+    assert line.endswith(" (see 'imageform track --help')"), err
     assert not (tmp_path / "p.csv").exists()
 
 

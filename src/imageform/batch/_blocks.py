@@ -16,11 +16,12 @@ import numpy as np
 from imageform._validate import check_option
 from imageform.batch._lazy import _TiffMeta
 from imageform.errors import InvalidInputError
+from imageform.workflows.color import CHUNKED_CHOICES
 
 #: The white-balance methods (of :data:`imageform.color.WHITE_BALANCE_METHODS`, the one
 #: list, which the test of the registries checks) whose illuminant is a streaming reduction
-#: (or needs none).
-_WB_METHODS = ("gray_world", "shades_of_gray", "manual")
+#: (or needs none); ``imageform chunked white-balance --method`` lists these alone.
+_WB_METHODS = CHUNKED_CHOICES["white_balance"]["method"]
 
 
 def _convert_block(block: np.ndarray, src: str, dst: str, params: dict[str, Any]) -> np.ndarray:

@@ -54,7 +54,12 @@ from imageform.batch._write import (
     _write_tiff,
     _write_zarr,
 )
-from imageform.errors import ImageformError, InvalidInputError, UnreadableFileError
+from imageform.errors import (
+    ImageformError,
+    InvalidInputError,
+    UnknownOptionError,
+    UnreadableFileError,
+)
 from imageform.workflows.color import CHUNKED_OPTIONS, DISPLAYABLE_SPACES
 
 __all__ = ["CHUNKED_COMMANDS", "ChunkedResult", "open_lazy", "process_chunked"]
@@ -120,8 +125,7 @@ def _options(cmd: str, options: Any) -> dict[str, Any]:
     given = options
     if isinstance(options, dict) and cmd == "white_balance" and "method" in options:
         # the methods chunked processing can stream, checked before the dataclass's own list
-        method = str(options["method"]).lower().replace("-", "_")
-        check_option(method, _WB_METHODS, "white-balance method for chunked processing")
+        _wb_method(options["method"])
     opts = batch_options(cmd, given)
     out: dict[str, Any] = {}
     honoured = _HONOURED[cmd]
@@ -139,8 +143,30 @@ def _options(cmd: str, options: Any) -> dict[str, Any]:
                 f"takes {', '.join('--' + v for v in honoured.values())}"
             )
     if cmd == "white_balance":
-        check_option(out["method"], _WB_METHODS, "white-balance method for chunked processing")
+        out["method"] = _wb_method(out["method"])
     return out
+
+
+def _wb_method(value: object) -> str:
+    """Return a white-balance method chunked processing streams, normalised; else raise.
+
+    One line: for another method of :func:`~imageform.color.white_balance` (``pca``), the
+    methods chunked processing streams, not that the name is unknown.
+    """
+    from imageform.color import WHITE_BALANCE_ALIASES, WHITE_BALANCE_METHODS
+
+    what = "white-balance method for chunked processing"
+    try:
+        return check_option(value, _WB_METHODS, what)
+    except UnknownOptionError:
+        key = value.strip().lower().replace("-", "_") if isinstance(value, str) else None
+        if key not in {*WHITE_BALANCE_METHODS, *WHITE_BALANCE_ALIASES, "chart"}:
+            raise
+    streamed = ", ".join(repr(m) for m in _WB_METHODS)
+    raise UnknownOptionError(
+        f"chunked processing streams the white-balance methods {streamed} only, got {value!r} "
+        "(the others need the whole image)"
+    )
 
 
 def process_chunked(

@@ -55,7 +55,7 @@ from imageform.batch._plan import (
     batch_workflow,
     plan_jobs,
 )
-from imageform.batch._temps import _remove_stale_temps, _run_lock
+from imageform.batch._temps import _live_runs, _remove_stale_temps, _run_lock
 from imageform.errors import InvalidInputError
 from imageform.workflows import Options
 
@@ -300,37 +300,72 @@ def run_batch(
     else:
         if scheduler is not None:
             _probe_scheduler(scheduler)  # before the output folder is made
-        with _run_lock(out_root) as run_id:
-            _remove_stale_temps(jobs, out_root, run_id)  # of runs that died, not running ones
-            workers = n_workers or min(os.cpu_count() or 1, len(todo))
-            state = _Manifest(out_root, manifest, producer)
-            try:
-                with (
-                    _interrupt_flag() as interrupted,
-                    _client(scheduler, workers, interrupted) as client,
-                ):
-                    _run_on(
-                        client,
-                        interrupted,
-                        wf.name,
-                        todo,
-                        opts,
-                        hold_s,
-                        results,
-                        progress,
-                        on_result,
-                        state,
-                        worker_timeout_s,
-                        run_id,
-                    )
-            except KeyboardInterrupt:
-                state.save()
-                done = sum(r.status != "failed" for r in results.values())
-                raise BatchInterrupted(done, len(jobs) - done) from None
-            finally:
-                state.save()
-                _remove_stale_temps(todo, out_root, run_id)  # left by workers killed mid-write
+        made = _new_folders(out_root, todo)  # what the run creates, to remove when left empty
+        try:
+            with _run_lock(out_root) as run_id:
+                _remove_stale_temps(jobs, out_root, run_id)  # of runs that died, not running ones
+                workers = n_workers or min(os.cpu_count() or 1, len(todo))
+                state = _Manifest(out_root, manifest, producer)
+                try:
+                    with (
+                        _interrupt_flag() as interrupted,
+                        _client(scheduler, workers, interrupted) as client,
+                    ):
+                        _run_on(
+                            client,
+                            interrupted,
+                            wf.name,
+                            todo,
+                            opts,
+                            hold_s,
+                            results,
+                            progress,
+                            on_result,
+                            state,
+                            worker_timeout_s,
+                            run_id,
+                        )
+                except KeyboardInterrupt:
+                    state.save()
+                    done = sum(r.status != "failed" for r in results.values())
+                    raise BatchInterrupted(done, len(jobs) - done) from None
+                finally:
+                    state.save()
+                    _remove_stale_temps(todo, out_root, run_id)  # left by workers killed mid-write
+        finally:
+            _remove_empty(made, out_root)  # a failed job leaves no empty folder behind
     return BatchReport(wf.name, tuple(results[j] for j in jobs))
+
+
+def _new_folders(out_root: Path, jobs: list[Job]) -> list[Path]:
+    """Return the folders a run into ``out_root`` may create for ``jobs``, deepest first.
+
+    Those that do not exist yet: ``out_root`` and the folders above it up to the first that
+    exists, and each job's output folder up to ``out_root``.
+    """
+    new: set[Path] = set()
+    for start, stop in [(out_root, None), *((j.output.parent, out_root) for j in jobs)]:
+        folder = start
+        while folder != stop and not folder.exists() and folder.parent != folder:
+            new.add(folder)
+            folder = folder.parent
+    return sorted(new, key=lambda p: len(p.parts), reverse=True)
+
+
+def _remove_empty(folders: list[Path], out_root: Path) -> None:
+    """Remove those of ``folders`` (deepest first) that the run left empty.
+
+    A job that failed leaves no new empty folder; a folder that existed before the run, or
+    holds anything (an output, the manifest, another run's lock or temporary file), is kept.
+    While another run goes on into ``out_root`` (its lock is held), nothing is removed: it
+    may be about to write into a folder that is still empty.
+    """
+    if out_root.is_dir() and _live_runs(out_root, None):
+        return
+    for folder in folders:
+        with contextlib.suppress(OSError):  # not empty, gone, or not ours to remove
+            if folder.is_dir() and not folder.is_symlink():
+                folder.rmdir()
 
 
 def _run_on(

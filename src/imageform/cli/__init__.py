@@ -18,6 +18,8 @@ import threading
 from collections.abc import Sequence
 from types import FrameType
 
+import click
+
 from imageform.cli._build import EXIT_CODES, CommandExit
 from imageform.cli._root import root
 
@@ -27,6 +29,26 @@ __all__ = ["EXIT_CODES", "main", "root"]
 def _first_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     return text[0] if text else type(exc).__name__
+
+
+def _one_line(text: str) -> str:
+    return " ".join(line.strip() for line in text.strip().splitlines() if line.strip())
+
+
+def _usage_line(exc: click.UsageError) -> str:
+    """Return the one line a usage error prints on stderr.
+
+    ``imageform white-balance: error: No such option '--bogus'. (see 'imageform white-balance
+    --help')``: the command as typed, the reason, and where its options are listed; click's own
+    four lines (usage, hint, blank, ``Error:``) said the same in four.
+    """
+    ctx = exc.ctx
+    where = ctx.command_path if ctx is not None else "imageform"
+    hint = ""
+    if ctx is not None and ctx.command.get_help_option(ctx) is not None:
+        names = ctx.command.get_help_option_names(ctx)
+        hint = f" (see '{where} {max(names, key=len)}')"
+    return f"{where}: error: {_one_line(exc.format_message())}{hint}"
 
 
 def _os_error(exc: OSError) -> str:
@@ -129,8 +151,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _main(argv: Sequence[str] | None) -> int:
-    import click
-
     from imageform.errors import ImageformError
 
     args = list(sys.argv[1:] if argv is None else argv)
@@ -153,9 +173,15 @@ def _main(argv: Sequence[str] | None) -> int:
         return exc.code
     except click.exceptions.Exit as exc:
         return int(exc.exit_code)
-    except click.ClickException as exc:
+    except click.exceptions.NoArgsIsHelpError as exc:  # a command alone: its help, exit 2
         exc.show()
-        return 2 if isinstance(exc, click.UsageError) else 1
+        return 2
+    except click.UsageError as exc:
+        print(_usage_line(exc), file=sys.stderr)
+        return 2
+    except click.ClickException as exc:
+        print(f"imageform: error: {_one_line(exc.format_message())}", file=sys.stderr)
+        return 1
     except (KeyboardInterrupt, click.exceptions.Abort):
         print(_INTERRUPTED, file=sys.stderr)
         return 130

@@ -10,16 +10,23 @@ single command) plus what scaling out needs: ``batch`` a glob of inputs, an outp
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import click
 
 from imageform._files import refuse_special, refuse_special_inside
-from imageform.cli._build import CommandExit, _naming_files, option_params, take_old_flags
+from imageform.cli._build import (
+    CommandExit,
+    _choices_text,
+    _naming_files,
+    option_params,
+    take_old_flags,
+)
 from imageform.errors import ImageformError
-from imageform.workflows import Workflow
-from imageform.workflows.color import CHUNKED_OPTIONS
+from imageform.workflows import Workflow, normalize_choice
+from imageform.workflows.color import CHUNKED_CHOICES, CHUNKED_OPTIONS
 
 __all__ = ["batch_group", "chunked_group"]
 
@@ -144,7 +151,40 @@ def _batch_command(wf: Workflow) -> click.Command:
     )
 
 
+def _narrowed(wf: Workflow, param: click.Parameter, choices: tuple[str, ...]) -> click.Parameter:
+    """Return an option of the single command that ``chunked`` takes with fewer choices.
+
+    ``--help`` lists only ``choices``; another name is a usage error naming those, also one
+    that the single command takes (``--method pca``: not streamed, rather than unknown).
+    """
+    from imageform.workflows import choice_names
+
+    (field,) = [f for f in wf.options.fields() if f.name == param.name]
+    every = choice_names(field.metadata["choices"])
+    flag = max(param.opts, key=len)
+
+    def check(ctx: click.Context, p: click.Parameter, value: str | None) -> str | None:
+        if value is None:
+            return None
+        try:
+            return normalize_choice(value, choices, flag)
+        except ImageformError as exc:
+            if value.strip().lower().replace("-", "_") not in every:
+                raise click.UsageError(str(exc)) from None
+        listed = ", ".join(c.replace("_", "-") for c in choices)
+        raise click.UsageError(
+            f"{flag} {value} needs the whole image in memory (imageform {wf.name} takes it); "
+            f"chunked processing streams {listed}"
+        )
+
+    assert isinstance(param, click.Option)
+    param.metavar = _choices_text(choices).strip()
+    param.callback = check
+    return param
+
+
 def _chunked_command(wf: Workflow) -> click.Command:
+    narrow: Mapping[str, tuple[str, ...]] = CHUNKED_CHOICES.get(wf.name.replace("-", "_"), {})
     params: list[click.Parameter] = [
         click.Argument(["image"], type=click.Path(path_type=Path), metavar="IMAGE"),
         click.Option(
@@ -154,7 +194,11 @@ def _chunked_command(wf: Workflow) -> click.Command:
             help="Output: a tiled .tif or a .zarr array.",
         ),
         # only what chunked honours (--alpha, --max-pixels ... were listed and ignored)
-        *[p for p in option_params(wf) if p.name in CHUNKED_OPTIONS[wf.name.replace("-", "_")]],
+        *[
+            _narrowed(wf, p, narrow[p.name]) if p.name in narrow else p
+            for p in option_params(wf)
+            if p.name in CHUNKED_OPTIONS[wf.name.replace("-", "_")]
+        ],
         click.Option(
             ["--chunk"],
             type=click.IntRange(1, 16384),

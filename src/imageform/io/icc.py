@@ -81,9 +81,12 @@ class DeclaredColorSpace(NamedTuple):
 
     ``name``: a space of :data:`imageform.color.SPACES` (``srgb``, ``display_p3``,
     ``adobe_rgb``, ``prophoto``, ``rec2020``, ``rec709`` or a ``linear_`` twin), or None
-    when the file declares nothing or a profile imageform does not recognise. ``source``:
-    ``icc``, ``png-srgb``, ``png-gama`` / ``png-chrm`` (a PNG's ``gAMA`` and ``cHRM`` chunks),
-    ``nclx`` (HEIF's H.273 code points), ``exif`` or ``none``.
+    when the file declares nothing or a profile imageform does not recognise; a TIFF that
+    :func:`~imageform.io.write_image` wrote in a space without a profile names that space
+    (``lab``, ``xyz`` ...). ``source``: ``icc``, ``png-srgb``, ``png-gama`` / ``png-chrm`` (a
+    PNG's ``gAMA`` and ``cHRM`` chunks), ``nclx`` (HEIF's H.273 code points), ``exif``,
+    ``tiff-description`` (``imageform_color_space`` in a TIFF's ImageDescription JSON) or
+    ``none``.
     ``description``: the profile's own description (``""`` without one).
     """
 

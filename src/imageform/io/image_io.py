@@ -127,6 +127,10 @@ _WRITTEN = ("png", "jpeg", "tiff", "npy")
 DEFAULT_MAX_PIXELS = 100_000_000
 
 _ALPHA = ("reject", "drop", "keep")
+#: The key of a TIFF's ImageDescription JSON (the one tifffile writes: ``{"shape": [...]}``)
+#: under which :func:`write_image` records a colour space that has no ICC profile (``lab``,
+#: ``xyz``, a ``linear_`` space ...) and :func:`image_color_space` reads it back.
+_TIFF_COLOR_SPACE_KEY = "imageform_color_space"
 _OUT_OF_RANGE = ("error", "clip")
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 #: The bit depths each PNG colour type allows (PNG 3rd ed., table 11.1).
@@ -1248,10 +1252,14 @@ def write_image(
     clip : bool, optional
         Deprecated: ``clip=True`` is ``out_of_range="clip"``.
     color_space : str, optional
-        The RGB space the values are in: its ICC profile (:func:`icc_profile`) is embedded
-        in a PNG (``iCCP``), JPEG or TIFF so that viewers and :func:`image_color_space`
-        read the colours as meant. None or ``srgb``: nothing is embedded (sRGB is what an
-        untagged file means); a space without a shipped profile is refused.
+        The space the values are in. An RGB space's ICC profile (:func:`icc_profile`) is
+        embedded in a PNG (``iCCP``), JPEG or TIFF so that viewers and
+        :func:`image_color_space` read the colours as meant. None or ``srgb``: nothing is
+        embedded (sRGB is what an untagged file means). A TIFF in a space without a shipped
+        profile (``lab``, ``xyz``, ``linear_rec2020`` ...: any of
+        :data:`imageform.color.SPACES`) records its name in the ImageDescription JSON
+        tifffile writes, ``{"shape": [...], "imageform_color_space": "lab"}``, which
+        :func:`image_color_space` reads back; a PNG or JPEG in such a space is refused.
 
     Returns
     -------
@@ -1284,11 +1292,16 @@ def write_image(
     shown = p.with_name(final_name(p.name))  # the user's name in messages, not a temporary's
     fmt = image_format(p)
     out_of_range = check_option(out_of_range, _OUT_OF_RANGE, "out-of-range policy")
-    profile = None
+    profile, recorded = None, None
     if color_space is not None:
-        from imageform.io.icc import embedded_profile
+        from imageform.color import space_name
+        from imageform.io.icc import RGB_PROFILED, embedded_profile
 
-        profile = embedded_profile(color_space)  # refuses a space without one
+        name = space_name(color_space, "color_space")
+        if fmt == "tiff" and name not in RGB_PROFILED:
+            recorded = name  # no profile to embed: named in the TIFF's description
+        else:
+            profile = embedded_profile(name)  # refuses a space without one
     bits = bit_depth
     if bits is not None and (isinstance(bits, bool) or bits not in (8, 16)):
         raise InvalidInputError(f"expected bit_depth 8 or 16, got {describe(bits)}")
@@ -1322,6 +1335,8 @@ def write_image(
         photometric = "rgb" if channels in (3, 4) else "minisblack"
         if profile is not None and channels in (3, 4):
             extra["iccprofile"] = profile
+        if recorded is not None:  # tifffile's JSON description, {"shape": [...]}, gets a key
+            extra["metadata"] = {_TIFF_COLOR_SPACE_KEY: recorded}
         atomic_write(p, lambda t: tifffile.imwrite(t, a, photometric=photometric, **extra))
         return WrittenImage(bits if a.dtype.kind == "u" else None, n_out)
     depth = bits if bits is not None else (16 if a.dtype == np.uint16 else 8)
@@ -1375,8 +1390,11 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     ``png-chrm``; a gamma or primaries of no space give ``name`` None with the chunks
     described); EXIF ``ColorSpace`` 1 (sRGB), or
     uncalibrated with the interoperability index ``R03`` (Adobe RGB, the DCF option camera
-    JPEGs use). A profile imageform does not recognise gives ``name`` None with its
-    description; ``.npy`` files and files that declare nothing give ``(None, "none", "")``.
+    JPEGs use); a TIFF without a profile whose ImageDescription JSON names a space under
+    ``imageform_color_space`` (what :func:`write_image` records for a space without a
+    profile: ``lab``, ``xyz`` ...; source ``tiff-description``). A profile imageform does not
+    recognise gives ``name`` None with its description; ``.npy`` files and files that
+    declare nothing give ``(None, "none", "")``.
 
     Parameters
     ----------
@@ -1429,11 +1447,18 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     if fmt == "tiff":  # tifffile: Pillow opens no float or 16-bit RGB TIFF
         try:
             with _tifffile().TiffFile(p) as tif:
-                tag = tif.pages.first.tags.get(34675)
+                page = tif.pages.first
+                tag = page.tags.get(34675)
                 icc_tiff = bytes(tag.value) if tag is not None else b""
+                description = page.description
         except Exception as exc:
             raise UnreadableFileError(p, f"{_one_line(exc)}") from None
-        return declared_by_profile(icc_tiff) if icc_tiff else DeclaredColorSpace(None, "none", "")
+        if icc_tiff:
+            return declared_by_profile(icc_tiff)
+        recorded = _recorded_space(description)
+        if recorded is not None:
+            return DeclaredColorSpace(recorded, "tiff-description", "")
+        return DeclaredColorSpace(None, "none", "")
     try:
         with _pillow_open(p) as im:
             icc = im.info.get("icc_profile")
@@ -1461,6 +1486,33 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     if cs == 0xFFFF and isinstance(interop, str) and interop.strip("\0") == "R03":
         return DeclaredColorSpace("adobe_rgb", "exif", "")
     return DeclaredColorSpace(None, "none", "")
+
+
+def _recorded_space(description: str) -> str | None:
+    """Return the space :func:`write_image` recorded in a TIFF's ImageDescription, or None.
+
+    Only a JSON object holding ``_TIFF_COLOR_SPACE_KEY`` with a space of
+    :data:`imageform.color.SPACES` counts; any other description (another tool's text, XML,
+    tifffile's own ``{"shape": ...}``, a name imageform does not know) declares nothing.
+    """
+    import json
+
+    text = description.strip() if isinstance(description, str) else ""
+    if not text.startswith("{") or len(text) > 65536:  # an OME-XML, an Aperio header ...
+        return None
+    try:
+        data = json.loads(text)
+    except ValueError:
+        return None
+    value = data.get(_TIFF_COLOR_SPACE_KEY) if isinstance(data, dict) else None
+    if not isinstance(value, str):
+        return None
+    from imageform.color import space_name
+
+    try:
+        return space_name(value, _TIFF_COLOR_SPACE_KEY)
+    except InvalidInputError:
+        return None
 
 
 #: HEIF's ``nclx`` colour description (ITU-T H.273 code points): (colour primaries, transfer

@@ -95,9 +95,9 @@ def _check_folder_name(wf: Workflow, out: Path) -> None:
     if wf.output is None or not wf.output.folder or out.is_dir():
         return
     if out.suffix.lower() in _FILE_SUFFIXES:
-        holds = wf.output.help.partition(": ")[2].split(" (replaced")[0].split("; replaced")[0]
+        holds = f" ({wf.output.holds})" if wf.output.holds else ""
         raise InvalidInputError(
-            f"{wf.name} writes a folder ({holds}): give -o a folder name, not the file name "
+            f"{wf.name} writes a folder{holds}: give -o a folder name, not the file name "
             f"{out.name!r}"
         )
 

@@ -342,18 +342,26 @@ class Input:
 
 @dataclass(frozen=True)
 class Output:
-    """The main output of a command, always ``-o/--out``."""
+    """The main output of a command, always ``-o/--out``.
+
+    ``folder``: the output is a folder the command fills; ``holds`` says what it holds, in a
+    few words (``"cameras.csv, points.ply, report.html, metrics.json"``), which the refusal
+    of a file name for it quotes (``reconstruct -o room.ply``).
+    """
 
     help: str
     required: bool = True
     default: str | None = None
     folder: bool = False
+    holds: str = ""
 
     def __post_init__(self) -> None:
         if self.default is not None and not isinstance(self.default, str):
             raise TypeError(
                 f"expected default as a str (or None), got {type(self.default).__name__}"
             )
+        if not isinstance(self.holds, str):
+            raise TypeError(f"expected holds as a str, got {type(self.holds).__name__}")
 
 
 @dataclass(frozen=True)

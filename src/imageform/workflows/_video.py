@@ -6,6 +6,8 @@ import math
 from dataclasses import asdict
 from typing import TYPE_CHECKING, Any, Literal, get_args
 
+from imageform.workflows._spec import option
+
 if TYPE_CHECKING:
     from imageform.io import VideoReader
 
@@ -16,6 +18,7 @@ __all__ = [
     "FieldOrderChoice",
     "deinterlace_note",
     "deinterlace_summary",
+    "field_order_option",
 ]
 
 #: ``--deinterlace``: the reader's methods (:data:`imageform.io.DEINTERLACE_METHODS`, a test
@@ -25,6 +28,22 @@ DEINTERLACE_CHOICES: tuple[str, ...] = get_args(DeinterlaceChoice)
 #: ``--field-order``: the field first in time (:data:`imageform.io.FIELD_ORDERS`).
 FieldOrderChoice = Literal["top", "bottom"]
 FIELD_ORDER_CHOICES: tuple[str, ...] = get_args(FieldOrderChoice)
+
+
+def field_order_option() -> Any:
+    """Return the ``--field-order`` option of every command that reads an interlaced video.
+
+    Declared once here (``track`` and ``reconstruct``: ``field_order: FieldOrderChoice | None
+    = field_order_option()``), so that its help, choices and default are one; a field, not a
+    base class as :class:`~imageform.workflows._images.OnDevice` is, so that ``--help`` lists
+    it beside each command's own ``--deinterlace``.
+    """
+    return option(
+        None,
+        help="The field first in time, top or bottom (default: the frames', else the "
+        "stream's, else top).",
+        choices=FIELD_ORDER_CHOICES,
+    )
 
 
 def deinterlace_summary(reader: VideoReader) -> dict[str, Any]:

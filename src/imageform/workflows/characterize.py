@@ -460,6 +460,9 @@ def characterize(run: Run, opts: CharacterizeOptions, *, out: Path, folder: str)
     return Result(summary, tuple(text))
 
 
+#: What the output folder holds (its --help, and the refusal of a file name for it).
+_HOLDS = "camera.toml, report.html, metrics.json"
+
 WORKFLOWS = (
     Workflow(
         "characterize",
@@ -476,8 +479,9 @@ WORKFLOWS = (
             ),
         ),
         Output(
-            "Output folder: camera.toml, report.html, metrics.json (replaced whole).",
+            f"Output folder: {_HOLDS} (replaced whole).",
             folder=True,
+            holds=_HOLDS,
         ),
         group="simulation",
         description="Checkerboard views give the intrinsics and distortion, a slanted edge "

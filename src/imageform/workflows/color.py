@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
@@ -39,6 +40,7 @@ from imageform.workflows._spec import (
 )
 
 __all__ = [
+    "CHUNKED_CHOICES",
     "CHUNKED_OPTIONS",
     "DISPLAYABLE_SPACES",
     "WORKFLOWS",
@@ -89,6 +91,14 @@ CHUNKED_OPTIONS = MappingProxyType(
             }
         ),
     }
+)
+#: The white-balance methods whose illuminant chunked processing streams (a reduction over
+#: every block, or none: manual); the other methods need the whole image in memory.
+_ChunkedWbMethod = Literal["gray_world", "shades_of_gray", "manual"]
+#: The options whose choices ``imageform chunked COMMAND`` narrows: command -> field -> names
+#: (its ``--help`` lists these alone, and the others are refused).
+CHUNKED_CHOICES: Mapping[str, Mapping[str, tuple[str, ...]]] = MappingProxyType(
+    {"white_balance": MappingProxyType({"method": get_args(_ChunkedWbMethod)})}
 )
 
 # ---------------------------------------------------------------- convert
@@ -278,7 +288,7 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     """``imageform convert``: one image file from one colour space to another."""
     refuse_absent_device(opts)  # before any file is read
     from imageform.color import SPACES, convert, path
-    from imageform.io import RGB_PROFILED, image_color_space
+    from imageform.io import RGB_PROFILED, image_color_space, image_format
 
     dst = opts.dst
     opts.check_used()  # the output was checked by execute (check_output), before this
@@ -296,14 +306,18 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     fn: Any = lambda band: convert(as_values(band, src), src, dst, **params)  # noqa: E731
     if opts.device == "cuda":
         fn = gpu_bands(run, f"{src} -> {dst} on a {img.dtype} image", fn)
-    tag = dst if dst in RGB_PROFILED else None
+    # an RGB space's ICC profile is embedded; a TIFF in another space (lab, xyz ...) records
+    # its name in the description, so that info and --from auto read it back
+    tiff = image_format(out) == "tiff"
+    tag = dst if dst in RGB_PROFILED or (tiff and dst != "srgb") else None
     n_out, dtype, lo, hi, shape = write_mapped(run, out, img, fn, opts, like=img, color_space=tag)
     summary = {
         "input": image,
         "output": out,
         "from": src,
         "declared": None if declared is None else declared.name,
-        "icc_profile_written": tag not in (None, "srgb"),
+        "icc_profile_written": tag in RGB_PROFILED and tag != "srgb",
+        "color_space_recorded": tag is not None and tag not in RGB_PROFILED,
         "to": dst,
         "path": [e.function for e in edges],
         "shape": list(shape),
@@ -366,10 +380,26 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
         minimum=0,
         maximum=100,
     )
-    p: float = option(6.0, help="shades-of-gray / gray-edge: Minkowski norm p >= 1.")
-    sigma: float = option(1.0, help="gray-edge, grayness-index: Gaussian scale in pixels.")
+    # the bounds are the library's (MAX_MINKOWSKI_P, MAX_SIGMA, Robertson's 600 mired; checked
+    # by tests/cli/test_white_balance_words.py), so that a mistake is named by its flag
+    p: float = option(
+        6.0,
+        help="shades-of-gray / gray-edge: Minkowski norm p, 1 to 10000.",
+        minimum=1.0,
+        maximum=1e4,
+    )
+    sigma: float = option(
+        1.0,
+        help="gray-edge, grayness-index: Gaussian scale in pixels, 0 to 1000.",
+        minimum=0.0,
+        maximum=1000.0,
+    )
     illuminant: str | None = option(None, help="manual: illuminant name, e.g. A, D50, F2.")
-    cct: float | None = option(None, help="manual: correlated colour temperature in kelvin.")
+    cct: float | None = option(
+        None,
+        help="manual: correlated colour temperature in kelvin, 1667 or above.",
+        minimum=1e6 / 600,
+    )
     normalize: _WbNormalize = option(
         "mean",
         help="Keep the mean grey level or the green channel.",
@@ -395,8 +425,10 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
     )
 
     def check(self) -> None:
-        """Check that --chart and --overlay come with --method chart only."""
+        """Check --illuminant, and that --chart and --overlay come with --method chart only."""
         super().check()
+        if self.illuminant is not None:
+            _check_illuminant(self.illuminant)
         if self.chart is not None:
             object.__setattr__(self, "chart", Path(self.chart))
         if normalize_choice(self.method, _WB_METHODS, "--method") != "chart":
@@ -414,6 +446,22 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
             "illuminant": self.illuminant,
             "cct": self.cct,
         }
+
+
+def _check_illuminant(name: str) -> None:
+    """Refuse an ``--illuminant`` that is no white point or RGB space, naming the flag."""
+    from imageform._validate import describe
+    from imageform.color import RGB_SPACES, WHITEPOINTS_XY, resolve_white
+    from imageform.errors import UnknownOptionError
+
+    try:
+        resolve_white(name, name="--illuminant")
+    except UnknownOptionError:
+        names = ", ".join([*WHITEPOINTS_XY[2], *RGB_SPACES])
+        raise UnknownOptionError(
+            f"unknown --illuminant {describe(name, 30)}; valid: an illuminant or RGB space "
+            f"name ({names})"
+        ) from None
 
 
 def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path) -> Result:
@@ -783,7 +831,10 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
         space = f"PNG chunks no space of imageform matches ({declared.description}); read as sRGB"
     elif declared.source in ("png-gama", "png-chrm"):
         space = f"{declared.name} ({declared.description})"
-    how = {"none": ""}.get(declared.source, f" ({declared.source})")
+    how = {
+        "none": "",
+        "tiff-description": " (recorded by imageform in the TIFF's description)",
+    }.get(declared.source, f" ({declared.source})")
     text = [
         f"{image}: {head.format}, {head.width} x {head.height} px, {head.channels} channel(s), "
         f"{head.dtype}",

@@ -353,6 +353,12 @@ def flatfield(run: Run, opts: FlatfieldOptions, *, out: Path, images: Any) -> Re
     return Result(summary, tuple(text))
 
 
+#: What the output folder holds (its --help, and the refusal of a file name for it).
+_HOLDS = (
+    "flatfield.tif, darkfield.tif (--darkfield), flatfield.json, mask.png (--mask auto), "
+    "corrected/ (--apply, --flat)"
+)
+
 WORKFLOWS = (
     Workflow(
         "flatfield",
@@ -368,11 +374,7 @@ WORKFLOWS = (
                 kind="text",
             ),
         ),
-        Output(
-            "Output folder: flatfield.tif, darkfield.tif (--darkfield), flatfield.json, "
-            "mask.png (--mask auto), corrected/ (--apply, --flat); replaced whole.",
-            folder=True,
-        ),
+        Output(f"Output folder: {_HOLDS}; replaced whole.", folder=True, holds=_HOLDS),
         group="analysis",
         description="Estimated (BaSiC from tiles or frames of varied content; --method radial "
         "from one frame, --mask auto for an endoscope's) or measured (--flat, --dark) flat "

@@ -30,9 +30,9 @@ from imageform.workflows._spec import (
 )
 from imageform.workflows._video import (
     DEINTERLACE_CHOICES,
-    FIELD_ORDER_CHOICES,
     DeinterlaceChoice,
     FieldOrderChoice,
+    field_order_option,
 )
 
 __all__ = ["CAMERA_COLUMNS", "WORKFLOWS", "ReconstructOptions"]
@@ -108,12 +108,7 @@ class ReconstructOptions(Options):
         "or blend.",
         choices=DEINTERLACE_CHOICES,
     )
-    field_order: FieldOrderChoice | None = option(
-        None,
-        help="The field first in time, top or bottom (default: the frames', else the "
-        "stream's, else top).",
-        choices=FIELD_ORDER_CHOICES,
-    )
+    field_order: FieldOrderChoice | None = field_order_option()
     contrast_threshold: float = option(
         0.04,
         help="SIFT's contrast threshold, in (0, 1): 0.01 finds ten times as many keypoints "
@@ -405,6 +400,9 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     return Result(summary, text)
 
 
+#: What the output folder holds (its --help, and the refusal of a file name for it).
+_HOLDS = "cameras.csv, points.ply, report.html, metrics.json"
+
 WORKFLOWS = (
     Workflow(
         "reconstruct",
@@ -419,10 +417,7 @@ WORKFLOWS = (
                 kind="text",
             ),
         ),
-        Output(
-            "Output folder: cameras.csv, points.ply, report.html, metrics.json (replaced whole).",
-            folder=True,
-        ),
+        Output(f"Output folder: {_HOLDS} (replaced whole).", folder=True, holds=_HOLDS),
         group="geometry",
         description="SIFT keypoints matched between neighbouring frames (--window), each pair "
         "verified by its essential matrix (RANSAC), the pair with the most parallax first, "

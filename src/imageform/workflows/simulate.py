@@ -333,6 +333,9 @@ def _render_views(run: Run, scene: Any, folder: Path, seed: int) -> list[Path]:
     return written
 
 
+#: What the output folder holds (its --help, and the refusal of a file name for it).
+_HOLDS = "report.html, metrics.json, stages/, camera.toml, views/"
+
 WORKFLOWS = (
     Workflow(
         "simulate",
@@ -341,8 +344,8 @@ WORKFLOWS = (
         SimulateOptions,
         (),
         Output(
-            "Output folder: report.html, metrics.json, stages/, camera.toml, views/ "
-            "(replaced whole).",
+            f"Output folder: {_HOLDS} (replaced whole).",
+            holds=_HOLDS,
             required=False,
             default="simulation",
             folder=True,

@@ -23,9 +23,9 @@ from imageform.errors import InvalidInputError
 from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
 from imageform.workflows._video import (
     DEINTERLACE_CHOICES,
-    FIELD_ORDER_CHOICES,
     DeinterlaceChoice,
     FieldOrderChoice,
+    field_order_option,
 )
 
 __all__ = ["POSE_COLUMNS", "WORKFLOWS", "TrackOptions", "parse_track_board"]
@@ -130,12 +130,7 @@ class TrackOptions(Options):
         "linear or blend (full frames).",
         choices=DEINTERLACE_CHOICES,
     )
-    field_order: FieldOrderChoice | None = option(
-        None,
-        help="The field first in time, top or bottom (default: the frames', else the "
-        "stream's, else top).",
-        choices=FIELD_ORDER_CHOICES,
-    )
+    field_order: FieldOrderChoice | None = field_order_option()
 
     def check(self) -> None:
         """Check the board, the lengths and the smoothing weight."""

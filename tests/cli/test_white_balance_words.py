@@ -1,0 +1,101 @@
+"""``imageform white-balance``: a bad value is named by the flag the user typed.
+
+The command line said "expected Minkowski p >= 1, got 0.5" for ``--p 0.5``, "CCT 100 K
+outside the range of the robertson1968 method" for ``--cct 100`` and "illuminant: unknown
+white 'Q' for illuminant; valid: ..., (x, y) or (X, Y, Z)" for ``--illuminant Q`` (exit 1,
+after reading the image): the library's words. The options now carry the library's bounds,
+so the command refuses such a value first, as a usage error naming ``--p``, ``--sigma``,
+``--cct`` or ``--illuminant`` (exit 2; ``imageform batch`` and ``imageform chunked`` alike);
+the library keeps its own parameter names.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from imageform.cli import main
+from imageform.errors import InvalidInputError
+from imageform.workflows.color import WhiteBalanceOptions
+
+ILLUMINANTS = (
+    "A, B, C, D50, D55, D65, D75, E, F2, F7, F11, srgb, rec709, adobe_rgb, display_p3, "
+    "rec2020, prophoto"
+)
+
+
+@pytest.mark.parametrize(
+    ("extra", "words"),
+    [
+        (["--method", "shades-of-gray", "--p", "0.5"], "expected --p >= 1, got 0.5"),
+        (["--method", "shades-of-gray", "--p", "1e9"], "expected --p <= 10000, got 1e+09"),
+        (["--method", "gray-edge", "--sigma", "-1"], "expected --sigma >= 0, got -1"),
+        (["--method", "grayness-index", "--sigma", "2000"], "expected --sigma <= 1000, got 2000"),
+        (["--method", "manual", "--cct", "100"], "expected --cct >= 1666.67, got 100"),
+        (
+            ["--method", "manual", "--illuminant", "Q"],
+            f"unknown --illuminant 'Q'; valid: an illuminant or RGB space name ({ILLUMINANTS})",
+        ),
+        (["--method", "white-patch", "--percentile", "150"], "expected --percentile <= 100"),
+    ],
+)
+@pytest.mark.parametrize("how", ["single", "batch", "chunked"])
+def test_a_bad_value_names_its_flag(
+    extra: list[str], words: str, how: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    if how == "chunked" and "--percentile" in extra:
+        pytest.skip("chunked processing takes no --percentile (no white patch)")
+    if how == "chunked" and "--sigma" in extra:
+        pytest.skip("chunked processing takes no --sigma (no grey edge)")
+    out = tmp_path / ("out" if how == "batch" else "o.png")
+    head = {"single": [], "batch": ["batch"], "chunked": ["chunked"]}[how]
+    given = f"{tmp_path}/*.png" if how == "batch" else str(tmp_path / "in.tif")
+    # the input does not exist: the options are refused before it is looked at
+    assert main([*head, "white-balance", given, "-o", str(out), *extra]) == 2
+    command = " ".join(["imageform", *head, "white-balance"])
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith(f"{command}: error: {words}"), line
+    assert not out.exists()
+
+
+def test_the_library_keeps_its_own_names() -> None:
+    from imageform.color import white_balance
+
+    img = np.full((4, 4, 3), 0.5)
+    with pytest.raises(InvalidInputError, match=r"^expected Minkowski p >= 1, got 0.5$"):
+        white_balance(img, "shades_of_gray", p=0.5)
+    with pytest.raises(InvalidInputError, match=r"^unknown white 'Q' for illuminant; valid: "):
+        white_balance(img, "manual", illuminant="Q")  # was "illuminant: unknown ... illuminant"
+    with pytest.raises(InvalidInputError, match="CCT 100 K outside the range"):
+        white_balance(img, "manual", cct=100.0)
+
+
+def _bounds(name: str) -> tuple[float | None, float | None]:
+    (f,) = [f for f in dataclasses.fields(WhiteBalanceOptions) if f.name == name]
+    return f.metadata["minimum"], f.metadata["maximum"]
+
+
+def test_the_options_bounds_are_the_library_s() -> None:
+    """The command refuses exactly what the library refuses: no value is refused by one and
+    taken by the other."""
+    from imageform.color import cct_to_xy, white_balance
+    from imageform.color.white_balance import MAX_MINKOWSKI_P, MAX_SIGMA
+
+    assert _bounds("p") == (1.0, MAX_MINKOWSKI_P)
+    assert _bounds("sigma") == (0.0, MAX_SIGMA)
+    lowest, top = _bounds("cct")
+    assert top is None and lowest is not None
+    cct_to_xy(lowest)  # Robertson's lowest line, 600 mired, is taken
+    with pytest.raises(InvalidInputError, match="outside the range"):
+        cct_to_xy(np.nextafter(lowest, 0.0))
+    img = np.full((4, 4, 3), 0.5)
+    white_balance(img, "gray_world", p=MAX_MINKOWSKI_P, sigma=MAX_SIGMA)  # both checked
+    assert WhiteBalanceOptions(p=MAX_MINKOWSKI_P, sigma=MAX_SIGMA, cct=lowest).cct == lowest
+
+
+@pytest.mark.parametrize("name", ["D50", "d65", "F11", "display-p3", "ProPhoto"])
+def test_every_listed_illuminant_is_taken(name: str) -> None:
+    assert WhiteBalanceOptions(method="manual", illuminant=name).illuminant == name
