@@ -266,3 +266,49 @@ def test_sfr_pixel_pitch_on_the_command_line(
         "imageform sfr: error: expected --pixel-pitch > 0, got '-1' (see 'imageform sfr --help')"
     ]
     assert not out.exists()
+
+
+def test_sfr_auto_takes_a_detectors_16_bit_grey_tiff_as_linear(tmp_path: Path) -> None:
+    """A 16-bit grey TIFF that declares no colour space (an X-ray, neutron or microscope
+    camera's; sfrmat3 takes such input as linear) is measured as linear values, with a note;
+    the same edge as a 16-bit PNG and an 8-bit grey TIFF stay photographs (sRGB)."""
+    import tifffile
+
+    from imageform.color import linear_to_srgb
+    from imageform.io import image_color_space, write_image
+
+    lin = render_slanted_edge((96, 64), angle_deg=4.0, sigma=0.8)
+    ref = float(slanted_edge_sfr(lin).mtf50[0])
+    raw = tmp_path / "detector.tif"
+    tifffile.imwrite(raw, np.round(lin * 60000).astype(np.uint16))
+    assert image_color_space(raw).source == "none"
+    s = execute("sfr", image=raw, out=None).summary
+    assert s["transfer"] == "linear"
+    assert s["edges"][0]["channels"]["Y"]["mtf50"] == pytest.approx(ref, rel=0.01)
+    forced = get_workflow("sfr").make_options(transfer="srgb")
+    assert execute("sfr", image=raw, out=None, options=forced).summary["transfer"] == "srgb"
+    png = tmp_path / "developed.png"
+    write_image(png, np.round(np.asarray(linear_to_srgb(lin)) * 65535).astype(np.uint16))
+    s = execute("sfr", image=png, out=None).summary
+    assert s["transfer"] == "srgb"  # a PNG stays a photograph (imageform's declare nothing)
+    assert s["edges"][0]["channels"]["Y"]["mtf50"] == pytest.approx(ref, rel=0.01)
+    eight = tmp_path / "grey8.tif"
+    tifffile.imwrite(eight, np.round(np.asarray(linear_to_srgb(lin)) * 255).astype(np.uint8))
+    assert execute("sfr", image=eight, out=None).summary["transfer"] == "srgb"
+
+
+def test_sfr_says_when_it_takes_a_tiff_as_linear(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import tifffile
+
+    from imageform.cli import main
+
+    raw = tmp_path / "detector.tif"
+    lin = render_slanted_edge((96, 64), angle_deg=4.0, sigma=0.8)
+    tifffile.imwrite(raw, np.round(lin * 60000).astype(np.uint16))
+    assert main(["sfr", str(raw)]) == 0
+    err = capsys.readouterr().err
+    assert "detector.tif is a 16-bit grey TIFF that declares no colour space" in err
+    assert main(["sfr", str(raw), "--transfer", "linear"]) == 0
+    assert "declares no colour space" not in capsys.readouterr().err

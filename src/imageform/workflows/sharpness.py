@@ -3,7 +3,8 @@
 With ``--roi x,y,w,h`` one edge region is measured; without it the slanted edges of a chart
 of dark squares are found (:func:`imageform.analysis.find_slanted_edges`) and every one is
 measured (:func:`imageform.analysis.slanted_edge_sfr`). 8- and 16-bit images are decoded
-from sRGB to linear values first unless ``--transfer linear`` (raw or linear files). A raw
+from sRGB to linear values first unless ``--transfer linear`` (raw or linear files); a
+16-bit grey image that declares no colour space (a detector's) is taken as linear. A raw
 file (``.dng``, ``.nef``, ...; what ``imageform simulate --lab`` writes for its edge) is
 measured on its mosaic, black level removed and the four photosites of the CFA balanced onto
 the greens' levels (:func:`imageform.sensor.equalize_cfa`, as ``imageform characterize``
@@ -44,8 +45,8 @@ class SfrOptions(ImageIn):
     transfer: _Transfer = option(
         "auto",
         help="Encoding of integer images: srgb (decoded to linear first) or linear; auto: "
-        "srgb for photographs, linear for DICOM and raw files. Float images are taken as "
-        "linear.",
+        "srgb for photographs, linear for DICOM and raw files and for 16-bit grey images "
+        "that declare no colour space (a detector's). Float images are taken as linear.",
         choices=get_args(_Transfer),
     )
     pixel_pitch: str | None = option(
@@ -139,8 +140,30 @@ def _linear(img: Any, transfer: str) -> Any:
     return np.asarray(srgb_to_linear(vals)) if transfer == "srgb" else vals
 
 
+def _detector_data(image: Path, img: Any) -> bool:
+    """Whether ``--transfer auto`` takes ``img`` as a detector's linear values.
+
+    A single-channel TIFF of 16 bits or more that declares no colour space (no ICC profile,
+    no space in its description): what X-ray, neutron and microscope cameras write. sfrmat3
+    takes its input as linear unless given an OECF; a developed photograph is colour or
+    8-bit, or carries its space. Decoding such a file from sRGB changed MTF50 by 13 % on a
+    neutron radiograph (0.0865 against 0.0991 cy/px). PNGs stay photographs (imageform's
+    own 16-bit PNGs declare nothing).
+    """
+    import numpy as np
+
+    from imageform.io import image_color_space, image_info
+
+    grey = img.ndim == 2 or img.shape[-1] == 1
+    if not grey or img.dtype.kind not in "ui" or np.dtype(img.dtype).itemsize < 2:
+        return False
+    if image_info(image).format != "tiff":
+        return False
+    return image_color_space(image).source == "none"
+
+
 def _edge_image(
-    image: Path, opts: SfrOptions
+    run: Run, image: Path, opts: SfrOptions
 ) -> tuple[Any, tuple[str, ...] | None, str, _Pitch | None]:
     """Return the linear image, its channels, the transfer applied and the pixel pitch.
 
@@ -164,6 +187,13 @@ def _edge_image(
         transfer = opts.transfer
         if transfer == "auto":
             transfer = "linear" if dicom else "srgb"
+            if not dicom and _detector_data(image, img):
+                transfer = "linear"
+                run.note(
+                    f"note: {image.name} is a 16-bit grey TIFF that declares no colour space: "
+                    "its values are taken as linear (a detector's); --transfer srgb if it is "
+                    "a developed photograph"
+                )
         return _linear(img, transfer), None, transfer, pitch
     from imageform.sensor import equalize_cfa
 
@@ -186,7 +216,7 @@ def sfr(run: Run, opts: SfrOptions, *, out: Path | None, image: Path) -> Result:
     from imageform.workflows._tables import write_table
 
     image = Path(image)
-    arr, names, transfer, pitch = _edge_image(image, opts)
+    arr, names, transfer, pitch = _edge_image(run, image, opts)
     roi = opts.region()
     if roi is not None:
         h, w = arr.shape[:2]
@@ -286,7 +316,8 @@ WORKFLOWS = (
         description="Without --roi the edges of a chart of dark squares turned a few degrees "
         "are found and each is measured (an image that is one edge crop is measured whole). "
         "Frequencies are in cycles/pixel along the edge normal (Nyquist 0.5). Integer "
-        "images are decoded from sRGB to linear first unless --transfer linear. A raw file "
+        "images are decoded from sRGB to linear first unless --transfer linear (16-bit grey "
+        "images that declare no colour space are taken as linear). A raw file "
         "is measured on its mosaic (black level removed, the CFA's photosites balanced on a "
         "neutral edge): one channel, raw. A DICOM image is measured on its values (after the "
         "Modality LUT) as linear, and its Imager Pixel Spacing (else Pixel Spacing) gives "
