@@ -80,3 +80,35 @@ def test_a_command_alone_still_prints_its_help(capsys: pytest.CaptureFixture[str
     err = capsys.readouterr().err
     assert err.startswith("Usage: imageform white-balance [OPTIONS] IMAGE")
     assert "--method" in err
+
+
+@pytest.mark.parametrize(
+    ("typed", "suggestion"),
+    [
+        ("--bit", "(Did you mean '--bit-depth'?)"),  # click offered --bits, --to, --white
+        ("--bi", "(Did you mean '--bit-depth'?)"),
+        ("--too", "(Did you mean '--to'?)"),
+        ("--white-pt", "(Did you mean '--white'?)"),
+    ],
+)
+def test_an_unknown_option_suggests_only_options_help_lists(
+    typed: str, suggestion: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Suggestions come from the visible options (never the hidden deprecated ``--bits``),
+    those that start with what was typed first."""
+    assert main(["convert", typed, "in.png", "-o", "out.png"]) == 2
+    err = capsys.readouterr().err
+    assert err == (
+        f"imageform convert: error: No such option '{typed}'. {suggestion} "
+        "(see 'imageform convert --help')\n"
+    )
+    assert "--bits" not in err
+
+
+def test_an_unknown_option_far_from_every_option_suggests_nothing(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["convert", "--bogus", "in.png", "-o", "out.png"]) == 2
+    assert capsys.readouterr().err == (
+        "imageform convert: error: No such option '--bogus'. (see 'imageform convert --help')\n"
+    )

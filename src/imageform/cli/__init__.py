@@ -48,7 +48,39 @@ def _usage_line(exc: click.UsageError) -> str:
     if ctx is not None and ctx.command.get_help_option(ctx) is not None:
         names = ctx.command.get_help_option_names(ctx)
         hint = f" (see '{where} {max(names, key=len)}')"
-    return f"{where}: error: {_one_line(exc.format_message())}{hint}"
+    message = exc.format_message()
+    if isinstance(exc, click.NoSuchOption) and ctx is not None:
+        message = _no_such_option(exc, ctx)
+    return f"{where}: error: {_one_line(message)}{hint}"
+
+
+def _no_such_option(exc: click.NoSuchOption, ctx: click.Context) -> str:
+    """Return the reason of an unknown option, suggesting only options ``--help`` lists.
+
+    "No such option '--bi'. (Did you mean '--bit-depth'?)". click suggests from every
+    option the parser knows, hidden deprecated spellings included (``--bit`` drew '--bits',
+    '--to', '--white' and not '--bit-depth'): here the visible options that start with what
+    was typed come first, then difflib's close matches (ratio 0.7 or more).
+    """
+    import difflib
+
+    typed = exc.option_name
+    visible = [
+        name
+        for param in ctx.command.get_params(ctx)
+        if isinstance(param, click.Option) and not param.hidden
+        for name in (*param.opts, *param.secondary_opts)
+        if name.startswith("-")
+    ]
+    prefix = [name for name in visible if typed.startswith("--") and name.startswith(typed)]
+    close = difflib.get_close_matches(typed, visible, n=3, cutoff=0.7)
+    picks = list(dict.fromkeys([*prefix, *close]))[:3]
+    text = f"No such option '{typed}'."
+    if len(picks) == 1:
+        return f"{text} (Did you mean '{picks[0]}'?)"
+    if picks:
+        return f"{text} (Did you mean one of: {', '.join(repr(p) for p in picks)}?)"
+    return text
 
 
 def _os_error(exc: OSError) -> str:
