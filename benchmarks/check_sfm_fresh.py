@@ -43,9 +43,11 @@ Held-out half (three repositories, five sequences):
   reduced 4 times (708 x 532), K from its ``K.txt`` scaled.
 
 For a sequence without a camera (the two endoscopes) the camera is pycolmap's
-self-calibration on the sequence itself (``OPENCV_FISHEYE``, focal length and distortion
-refined, the field of view masked, SIFT's peak threshold a quarter of its default), written
-as a ``kannala_brandt`` camera file that both programs then use fixed, as
+self-calibration on the sequence itself (``RADIAL_FISHEYE``: one focal length, from 0.45
+times the width, and two radial terms refined; the field of view masked, SIFT's peak
+threshold a quarter of its default; ``OPENCV_FISHEYE``, its two focal lengths free,
+diverged on the tuning clips: fx and fy 77 and 114 px, 2 frames registered), written as a
+``kannala_brandt`` camera file (k1, k2) that both programs then use fixed, as
 ``check_endo_real.py`` does: the comparison is between two programs with the same camera,
 and the row of the self-calibrating run is the reference. imageform has no self-calibration
 and ``imageform reconstruct`` needs ``--camera`` (``Error: Missing option '--camera'``).
@@ -60,7 +62,12 @@ error (px), seconds (wall, one run, a loaded machine); against the truth where t
 one, else against the reference (pycolmap): over consecutive frames registered in both,
 the median angle between relative rotations and between relative translation directions
 (degrees), and the camera centres' RMS after the best similarity as a share of the
-reference path's length (%). Run::
+reference path's length (%). A sequence with a given camera and no truth has one more
+pycolmap row, its focal length and radial term refined from the given camera
+(``SIMPLE_RADIAL``): a check of the given camera (its note prints the focal length found).
+pycolmap's runs are kept in the data folder (``pycolmap.json``, ``selfcal.json``): a second
+run, e.g. with the code before a change on ``PYTHONPATH``, compares against the same ones.
+Run::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_sfm_fresh.py \\
         --prepare /work/.mirror --data /tmp/sfmfresh/data
@@ -74,7 +81,6 @@ from __future__ import annotations
 
 import argparse
 import hashlib
-import io
 import itertools
 import json
 import os
@@ -159,37 +165,37 @@ SEQUENCES: dict[str, dict[str, Any]] = {
 _SLAM = "SLAM14Lectures/slambook/second_edition"
 #: The held-out sequences' source files, frozen before any run: path -> SHA-256.
 HELD_OUT_SHA256: dict[str, str] = {
-    "BaymaxShao/EndoMODE:vis_data/7.gif": "3fd458edbcd583ccc195d3713c2cfad6d8479d51369111fecc675b0b88b44e42",
-    "BaymaxShao/EndoMODE:vis_data/43.gif": "33bb3187c1e27e4c6b0fd3b18a89b92dd81e2886520d44f89182ea91a81b0f16",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.359684.png": "0830aec024d647839505c8a3ef24ac505384c3011af9cc2d06e1babeff8c33fa",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.391690.png": "d5272c812dc4a8215321d0cab3f200f4b6b4102420ba3d22d0e88ba4943f6b0d",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.423683.png": "153c260bd88c4de7ae0b199c99c35ad1f67eacd242454fd66f5dc4cc1f439197",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.459685.png": "d648701b8c1454afc2b8267153b4b8b3547dac91fd17f90040ba74f7a0a6af84",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.491698.png": "b6c0a4883ad7cc0ab953c517f82cc4d44a870a4e2aa8e0fde9b806cfea599eb7",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.523684.png": "7d7d71d4f65329e8b5fab4aff6dcb220e06f5f921c94a41ee15810ad9e23f1e2",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.559753.png": "473afbe7679a82f1fa4f8814a4d20b2cb3f45922e04cbfc656d72067dfc02abd",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.591640.png": "474ce9ee8ef5515ff9bccb68d0ec30284f24b66913f1a5c257a7cc4e7ec5352d",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.627706.png": "86508ac1ab528bb3cd7eb825e1fa8542e1e20b2c2825a239983af9b9d783a0a6",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/groundtruth.txt": "48c4fa61f5d78310ea579f404d31d296738c4210c19c2bdac4a5cdf6bff50831",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch5/rgbd/color/1.png": "07756976d509bd82dfa1d9201b828ca2319da419ebda5f1009d4ea1bc7284b2e",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch5/rgbd/color/2.png": "c8b91988f4e149a3c0ccde58fc8be682d6cbde903f311c72cf626fdcad656fb1",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch5/rgbd/color/3.png": "0b675c34f09e694f515090ad838e4a6327cf4414773035bab303f7578a29f99b",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch5/rgbd/color/4.png": "48f75e50531ca655155fad2658e9f5ff92dae4c5daa3940898053286038b189c",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch5/rgbd/color/5.png": "bde1c22257b932e28e69a01830354a7eb06ff4833c2de3ae137ca6e17f6a4007",
-    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch5/rgbd/pose.txt": "8a105e14e26fb22a45fef0f628c576c1b9e02e5a7ff662e48f6de13c7c9c783e",
-    "openMVG/ImageDataset_SceauxCastle:images/100_7100.JPG": "b475a1f74cd54536b6fe186fb165431ef0ee502f56b0d9895d6da576e364ee1e",
-    "openMVG/ImageDataset_SceauxCastle:images/100_7101.JPG": "05de696ef02054a3d22af94f48fa3cb88df801cfe48561ad82010a130f408723",
-    "openMVG/ImageDataset_SceauxCastle:images/100_7102.JPG": "9c25103cf8411909773a189d524eb959a0f8a9ac74a1632b3ca343b605b7e034",
-    "openMVG/ImageDataset_SceauxCastle:images/100_7103.JPG": "eebf00b09b773aff229e53c4d8c744c5f64f3c004fa8edece0f3d8c917a19411",
-    "openMVG/ImageDataset_SceauxCastle:images/100_7104.JPG": "3b18d6112bb68aa15e1e20d3be234ea4fa88ecf349f42d89bd7830d75ebe4fc6",
-    "openMVG/ImageDataset_SceauxCastle:images/100_7105.JPG": "e67d29ccf210fab3227fec99e5a32862d3266f81bf4694eeb30cbe984a0b309f",
-    "openMVG/ImageDataset_SceauxCastle:images/100_7106.JPG": "83a977d2a1b5eb733c88bde10646e649ff87f75a94faa240354907920c070cda",
-    "openMVG/ImageDataset_SceauxCastle:images/100_7107.JPG": "7719235b80e88646ae8dfd8fddfcfcb4a03d4ef9133a62a551004cd5ccfd86c5",
-    "openMVG/ImageDataset_SceauxCastle:images/100_7108.JPG": "f1e6fd28a291337d578488a70c713f580d53f4d5073a66659a0d2401ff7071b2",
-    "openMVG/ImageDataset_SceauxCastle:images/100_7109.JPG": "64ae29fe51d7f45f81edec73d9004d6c99e1c198192487aa9e3d00ff4cd3d433",
-    "openMVG/ImageDataset_SceauxCastle:images/100_7110.JPG": "cdc7bd37efaf04e6c84f7cc3cafdf5e6890b01756c936d60faae53dab95bf8e9",
-    "openMVG/ImageDataset_SceauxCastle:images/K.txt": "78bd7084ce90963768e7a714ecbb8aa68293741c37c729b49c819f76efb5d4aa",
-    "openMVG/ImageDataset_SceauxCastle:images/Readme.txt": "4bdc6e27256b4cdd06f35d534b99a77dc6675793a95639c52cdeb2593249d799",
+    "BaymaxShao/EndoMODE:vis_data/7.gif": "3fd458edbcd583ccc195d3713c2cfad6d8479d51369111fecc675b0b88b44e42",  # noqa: E501
+    "BaymaxShao/EndoMODE:vis_data/43.gif": "33bb3187c1e27e4c6b0fd3b18a89b92dd81e2886520d44f89182ea91a81b0f16",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.359684.png": "0830aec024d647839505c8a3ef24ac505384c3011af9cc2d06e1babeff8c33fa",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.391690.png": "d5272c812dc4a8215321d0cab3f200f4b6b4102420ba3d22d0e88ba4943f6b0d",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.423683.png": "153c260bd88c4de7ae0b199c99c35ad1f67eacd242454fd66f5dc4cc1f439197",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.459685.png": "d648701b8c1454afc2b8267153b4b8b3547dac91fd17f90040ba74f7a0a6af84",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.491698.png": "b6c0a4883ad7cc0ab953c517f82cc4d44a870a4e2aa8e0fde9b806cfea599eb7",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.523684.png": "7d7d71d4f65329e8b5fab4aff6dcb220e06f5f921c94a41ee15810ad9e23f1e2",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.559753.png": "473afbe7679a82f1fa4f8814a4d20b2cb3f45922e04cbfc656d72067dfc02abd",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.591640.png": "474ce9ee8ef5515ff9bccb68d0ec30284f24b66913f1a5c257a7cc4e7ec5352d",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/rgb/1305031453.627706.png": "86508ac1ab528bb3cd7eb825e1fa8542e1e20b2c2825a239983af9b9d783a0a6",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch8/data/data/groundtruth.txt": "48c4fa61f5d78310ea579f404d31d296738c4210c19c2bdac4a5cdf6bff50831",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch5/rgbd/color/1.png": "07756976d509bd82dfa1d9201b828ca2319da419ebda5f1009d4ea1bc7284b2e",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch5/rgbd/color/2.png": "c8b91988f4e149a3c0ccde58fc8be682d6cbde903f311c72cf626fdcad656fb1",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch5/rgbd/color/3.png": "0b675c34f09e694f515090ad838e4a6327cf4414773035bab303f7578a29f99b",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch5/rgbd/color/4.png": "48f75e50531ca655155fad2658e9f5ff92dae4c5daa3940898053286038b189c",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch5/rgbd/color/5.png": "bde1c22257b932e28e69a01830354a7eb06ff4833c2de3ae137ca6e17f6a4007",  # noqa: E501
+    "jeannotes/Slam_Course:SLAM14Lectures/slambook/second_edition/ch5/rgbd/pose.txt": "8a105e14e26fb22a45fef0f628c576c1b9e02e5a7ff662e48f6de13c7c9c783e",  # noqa: E501
+    "openMVG/ImageDataset_SceauxCastle:images/100_7100.JPG": "b475a1f74cd54536b6fe186fb165431ef0ee502f56b0d9895d6da576e364ee1e",  # noqa: E501
+    "openMVG/ImageDataset_SceauxCastle:images/100_7101.JPG": "05de696ef02054a3d22af94f48fa3cb88df801cfe48561ad82010a130f408723",  # noqa: E501
+    "openMVG/ImageDataset_SceauxCastle:images/100_7102.JPG": "9c25103cf8411909773a189d524eb959a0f8a9ac74a1632b3ca343b605b7e034",  # noqa: E501
+    "openMVG/ImageDataset_SceauxCastle:images/100_7103.JPG": "eebf00b09b773aff229e53c4d8c744c5f64f3c004fa8edece0f3d8c917a19411",  # noqa: E501
+    "openMVG/ImageDataset_SceauxCastle:images/100_7104.JPG": "3b18d6112bb68aa15e1e20d3be234ea4fa88ecf349f42d89bd7830d75ebe4fc6",  # noqa: E501
+    "openMVG/ImageDataset_SceauxCastle:images/100_7105.JPG": "e67d29ccf210fab3227fec99e5a32862d3266f81bf4694eeb30cbe984a0b309f",  # noqa: E501
+    "openMVG/ImageDataset_SceauxCastle:images/100_7106.JPG": "83a977d2a1b5eb733c88bde10646e649ff87f75a94faa240354907920c070cda",  # noqa: E501
+    "openMVG/ImageDataset_SceauxCastle:images/100_7107.JPG": "7719235b80e88646ae8dfd8fddfcfcb4a03d4ef9133a62a551004cd5ccfd86c5",  # noqa: E501
+    "openMVG/ImageDataset_SceauxCastle:images/100_7108.JPG": "f1e6fd28a291337d578488a70c713f580d53f4d5073a66659a0d2401ff7071b2",  # noqa: E501
+    "openMVG/ImageDataset_SceauxCastle:images/100_7109.JPG": "64ae29fe51d7f45f81edec73d9004d6c99e1c198192487aa9e3d00ff4cd3d433",  # noqa: E501
+    "openMVG/ImageDataset_SceauxCastle:images/100_7110.JPG": "cdc7bd37efaf04e6c84f7cc3cafdf5e6890b01756c936d60faae53dab95bf8e9",  # noqa: E501
+    "openMVG/ImageDataset_SceauxCastle:images/K.txt": "78bd7084ce90963768e7a714ecbb8aa68293741c37c729b49c819f76efb5d4aa",  # noqa: E501
+    "openMVG/ImageDataset_SceauxCastle:images/Readme.txt": "4bdc6e27256b4cdd06f35d534b99a77dc6675793a95639c52cdeb2593249d799",  # noqa: E501
 }
 
 
@@ -511,11 +517,14 @@ def run_pycolmap(
 
     n = len(frames)
     h, w = frames[0].shape[:2]
-    if cam is None:  # a fisheye guess: f from a 140-degree field across the width
-        model, params = "OPENCV_FISHEYE", (0.41 * w, 0.41 * w, w / 2, h / 2, 0, 0, 0, 0)
+    if cam is None:  # an equidistant guess, one focal length: 0.45 w (the C3VD camera's)
+        model, params = "RADIAL_FISHEYE", (0.45 * w, w / 2, h / 2, 0, 0)
     elif type(cam.distortion).__name__ == "KannalaBrandt":
         model = "OPENCV_FISHEYE"
         params = (*np.diag(cam.K)[:2], *cam.K[:2, 2], *cam.distortion.coeffs)
+    elif self_calibrate:  # from the given camera: one focal length and k refined
+        model = "SIMPLE_RADIAL"
+        params = (float(np.mean(np.diag(cam.K)[:2])), *cam.K[:2, 2], 0.0)
     elif cam.distortion is not None and any(cam.distortion.coeffs):
         c = cam.distortion.coeffs
         model = "FULL_OPENCV"
@@ -584,10 +593,11 @@ def self_calibrated_camera(folder: Path, frames: list[np.ndarray]) -> tuple[Any,
     res = run_pycolmap(frames, None, True, self_calibrate=True)
     if "camera" not in res:
         raise SystemExit(f"{folder.name}: pycolmap's self-calibration made no model")
-    fx, fy, cx, cy, *k = res["camera"]
+    f, cx, cy, k1, k2 = res["camera"]  # RADIAL_FISHEYE: theta (1 + k1 theta^2 + k2 theta^4)
     h, w = frames[0].shape[:2]
-    K = np.array([[fx, 0, cx], [0, fy, cy], [0, 0, 1]])
-    write_camera(path, Camera(K, distortion=KannalaBrandt(*k), image_size=(w, h)))
+    K = np.array([[f, 0, cx], [0, f, cy], [0, 0, 1]])
+    lens = KannalaBrandt(k1, k2, 0.0, 0.0)
+    write_camera(path, Camera(K, distortion=lens, image_size=(w, h)))
     keep = {key: (v.tolist() if isinstance(v, np.ndarray) else v) for key, v in res.items()}
     cache.write_text(json.dumps(keep))
     return read_camera(path).camera, res
@@ -613,20 +623,34 @@ def sequence_table(name: str, data: Path) -> tuple[str, list[list[Any]]]:
     print(f"  {name}: {n} frames {w} x {h}, camera {cam_note}", file=sys.stderr)
     runs.insert(0, ("imageform library", run_imageform(frames, cam, endo)))
     runs.insert(1, ("imageform CLI", run_cli(folder, endo)))
-    runs.insert(2, ("pycolmap, camera fixed", run_pycolmap(frames, cam, endo)))
+    cached = folder / "pycolmap.json"  # pycolmap's run, kept for a second (before/after) run
+    if cached.exists():
+        fixed = json.loads(cached.read_text())
+        fixed["R"], fixed["t"] = np.array(fixed["R"], float), np.array(fixed["t"], float)
+    else:
+        fixed = run_pycolmap(frames, cam, endo)
+        keep = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in fixed.items()}
+        cached.write_text(json.dumps(keep))
+    runs.insert(2, ("pycolmap, camera fixed", fixed))
     truth = None
     if (folder / "truth.npz").exists():
         with np.load(folder / "truth.npz") as z:
             truth = (z["R"], z["t"])
-    ref_label = "truth" if truth is not None else runs[-1][0]
-    ref = truth if truth is not None else (runs[-1][1]["R"], runs[-1][1]["t"])
+    ref_run = runs[-1][1]  # the self-calibration for an endoscope, else the fixed camera's
+    if truth is None and cam_note == "given":  # a check of the given camera: pycolmap's own
+        check = run_pycolmap(frames, cam, endo, self_calibrate=True)
+        f, _, _, k1 = check.get("camera", [np.nan] * 4)
+        check["note"] = f"its f {f:.1f} px (given {cam.K[0, 0]:.1f}), k {k1:.3f}"
+        runs.append(("pycolmap, focal length and k refined", check))
+    ref_label = "truth" if truth is not None else next(lb for lb, r in runs if r is ref_run)
+    ref = truth if truth is not None else (ref_run["R"], ref_run["t"])
     rows = []
     for label, r in runs:
         ok = r["reg"] > 0 and "points" in r
-        if "R" in r and ok and not (truth is None and r is runs[-1][1]):
+        if "R" in r and ok and not (truth is None and r is ref_run):
             rot, tra, rms = agreement(r["R"], r["t"], *ref)
             vs = f"{rot:.2f} / {tra:.2f} / {rms:.2f}"
-        elif truth is None and r is runs[-1][1]:
+        elif truth is None and r is ref_run:
             vs = "reference"
         else:
             vs = "-" if not ok else "(as the library)"
