@@ -47,7 +47,8 @@ self-calibration on the sequence itself (``RADIAL_FISHEYE``: one focal length, f
 times the width, and two radial terms refined; the field of view masked, SIFT's peak
 threshold a quarter of its default; ``OPENCV_FISHEYE``, its two focal lengths free,
 diverged on the tuning clips: fx and fy 77 and 114 px, 2 frames registered), written as a
-``kannala_brandt`` camera file (k1, k2) that both programs then use fixed, as
+``kannala_brandt`` camera file (k1, k2) that both programs then use fixed (when the
+self-calibration makes no model, its starting guess: f 0.45 w, equidistant), as
 ``check_endo_real.py`` does: the comparison is between two programs with the same camera,
 and the row of the self-calibrating run is the reference. imageform has no self-calibration
 and ``imageform reconstruct`` needs ``--camera`` (``Error: Missing option '--camera'``).
@@ -591,10 +592,11 @@ def self_calibrated_camera(folder: Path, frames: list[np.ndarray]) -> tuple[Any,
         res["R"], res["t"] = np.array(res["R"]), np.array(res["t"])
         return read_camera(path).camera, res
     res = run_pycolmap(frames, None, True, self_calibrate=True)
-    if "camera" not in res:
-        raise SystemExit(f"{folder.name}: pycolmap's self-calibration made no model")
-    f, cx, cy, k1, k2 = res["camera"]  # RADIAL_FISHEYE: theta (1 + k1 theta^2 + k2 theta^4)
     h, w = frames[0].shape[:2]
+    if "camera" not in res:  # no model: its starting guess, an equidistant fisheye
+        res["camera"] = [0.45 * w, w / 2, h / 2, 0.0, 0.0]
+        res["note"] = "no model: the camera is its guess (f 0.45 w, equidistant)"
+    f, cx, cy, k1, k2 = res["camera"]  # RADIAL_FISHEYE: theta (1 + k1 theta^2 + k2 theta^4)
     K = np.array([[f, 0, cx], [0, f, cy], [0, 0, 1]])
     lens = KannalaBrandt(k1, k2, 0.0, 0.0)
     write_camera(path, Camera(K, distortion=lens, image_size=(w, h)))
@@ -620,6 +622,8 @@ def sequence_table(name: str, data: Path) -> tuple[str, list[list[Any]]]:
         cam, selfcal = self_calibrated_camera(folder, frames)
         runs.append(("pycolmap, self-calibrated", selfcal))
         cam_note = "pycolmap's self-calibration"
+        if selfcal["reg"] == 0:
+            cam_note = "a guess (pycolmap's self-calibration made no model)"
     print(f"  {name}: {n} frames {w} x {h}, camera {cam_note}", file=sys.stderr)
     runs.insert(0, ("imageform library", run_imageform(frames, cam, endo)))
     runs.insert(1, ("imageform CLI", run_cli(folder, endo)))
@@ -636,7 +640,8 @@ def sequence_table(name: str, data: Path) -> tuple[str, list[list[Any]]]:
     if (folder / "truth.npz").exists():
         with np.load(folder / "truth.npz") as z:
             truth = (z["R"], z["t"])
-    ref_run = runs[-1][1]  # the self-calibration for an endoscope, else the fixed camera's
+    # the self-calibration for an endoscope (when it made a model), else the fixed camera's
+    ref_run = runs[-1][1] if runs[-1][1]["reg"] > 0 else fixed
     if truth is None and cam_note == "given":  # a check of the given camera: pycolmap's own
         check = run_pycolmap(frames, cam, endo, self_calibrate=True)
         f, _, _, k1 = check.get("camera", [np.nan] * 4)
