@@ -40,7 +40,7 @@ Held-out half (three repositories, five sequences):
   the poses of its ``pose.txt``.
 - ``sceaux``: openMVG/ImageDataset_SceauxCastle at ``fde7f5f`` (photographs copyright
   2012 Pierre Moulon, no licence stated), 11 photographs of a castle, 2832 x 2128,
-  reduced 4 times (708 x 532), K from its ``K.txt`` scaled.
+  reduced 4 times (708 x 532, OpenCV's bilinear resize), K from its ``K.txt`` scaled.
 
 For a sequence without a camera (the two endoscopes) the camera is pycolmap's
 self-calibration on the sequence itself (``RADIAL_FISHEYE``: one focal length, from 0.45
@@ -289,6 +289,8 @@ def _decode(data: bytes) -> np.ndarray:
     import cv2
 
     im = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+    if im is None:
+        raise SystemExit("a source image could not be decoded")
     return np.ascontiguousarray(im[..., ::-1])
 
 
@@ -368,7 +370,8 @@ def prepare(name: str, mirrors: Path, out: Path) -> None:
         keys = sorted(k for k in src if k.lower().endswith(".jpg"))
         for k in keys:
             im = _decode(src[k])
-            frames.append(cv2.resize(im, (im.shape[1] // 4, im.shape[0] // 4), cv2.INTER_AREA))
+            # OpenCV's default interpolation (bilinear): the frames the table measured
+            frames.append(cv2.resize(im, (im.shape[1] // 4, im.shape[0] // 4)))
         Kf = np.array(src["images/K.txt"].decode().split(), float).reshape(3, 3)
         K = Kf.copy()
         K[:2] /= 4.0
@@ -447,10 +450,13 @@ def agreement(
 def _frames(folder: Path) -> list[np.ndarray]:
     import cv2
 
-    return [
-        np.ascontiguousarray(cv2.imread(str(p), cv2.IMREAD_COLOR)[..., ::-1])
-        for p in sorted((folder / "frames").glob("*.png"))
-    ]
+    out = []
+    for p in sorted((folder / "frames").glob("*.png")):
+        im = cv2.imread(str(p), cv2.IMREAD_COLOR)
+        if im is None:
+            raise SystemExit(f"{p}: not readable (run --prepare)")
+        out.append(np.ascontiguousarray(im[..., ::-1]))
+    return out
 
 
 def _nan_poses(n: int) -> tuple[np.ndarray, np.ndarray]:
