@@ -74,11 +74,15 @@ def render(
     noise: float = 1.5,
     rng: np.random.Generator | None = None,
     distortion: Any = None,
+    photos: list[np.ndarray] | None = None,
 ) -> np.ndarray:
-    """One frame of the room, uint8 RGB (through ``distortion``'s lens when given)."""
+    """One frame of the room, uint8 RGB (through ``distortion``'s lens when given).
+
+    ``photos``: the walls' pictures (default: the Kodak photographs, else scikit-image's).
+    """
     import cv2
 
-    photos = _photos()
+    photos = _photos() if photos is None else photos
     R, t = pose
     w, h = size
     C = -R.T @ t
@@ -170,8 +174,9 @@ def sequence(
     noise: float = 1.5,
     blur: float = 0.0,
     jpeg: int | None = None,
+    photos: list[np.ndarray] | None = None,
 ) -> tuple[list[np.ndarray], list]:
-    """``n`` frames of the walk and their true poses.
+    """``n`` frames of the walk and their true poses (``photos``: as :func:`render`).
 
     Without ``blur`` or ``jpeg`` the noise is added by :func:`render` (the frames of the
     first tests); with them each frame is rendered clean, blurred, given its noise and
@@ -180,9 +185,19 @@ def sequence(
     truth = poses(n)
     rng = np.random.default_rng(5)
     if not blur and jpeg is None:
-        return [render(K, p, size, noise=noise, rng=rng) for p in truth], truth
-    frames = [render(K, p, size, noise=0.0) for p in truth]
+        return [render(K, p, size, noise=noise, rng=rng, photos=photos) for p in truth], truth
+    frames = [render(K, p, size, noise=0.0, photos=photos) for p in truth]
     return [degrade(f, blur=blur, noise=noise, jpeg=jpeg, rng=rng) for f in frames], truth
+
+
+def blobs(seed: int, size: tuple[int, int] = (640, 480)) -> np.ndarray:
+    """Colour blobs at two scales, uint8 RGB: a texture unlike any photograph's."""
+    import cv2
+
+    r = np.random.default_rng(seed)
+    coarse = cv2.resize(r.random((24, 32, 3), np.float32), size, interpolation=cv2.INTER_CUBIC)
+    fine = cv2.resize(r.random((96, 128, 3), np.float32), size, interpolation=cv2.INTER_CUBIC)
+    return np.clip(255 * (0.6 * coarse + 0.4 * fine), 0, 255).astype(np.uint8)
 
 
 def align_rms(est_centres: np.ndarray, true_centres: np.ndarray) -> float:

@@ -50,7 +50,11 @@ pipeline, each step a public function:
    re-triangulated;
 8. at the end: a robust adjustment (Huber), outliers dropped, completion, merging and
    re-triangulation, then adjustments without the observations beyond 2 pixels, the last
-   one plain least squares.
+   one plain least squares;
+9. a model that holds fewer than half the frames (its start in a part of the sequence a
+   weak link cuts off): steps 5-8 again from a pair among the frames it left out (the
+   keypoints and verified pairs kept), twice at most, and the model with the most frames
+   returned, as COLMAP keeps the largest of its models.
 
 The reconstruction is up to a similarity (a rotation, a translation and a scale): the
 first registered frame's camera (frame 0's, when it is registered) is the world frame and
@@ -61,7 +65,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -1082,6 +1086,9 @@ def reconstruct_sequence(
     Returns
     -------
     Reconstruction
+        One model. When the first holds fewer than half the frames, another is started
+        among the frames it left out (twice at most) and the one with the most frames is
+        returned; its notes say so.
 
     Raises
     ------
@@ -1090,6 +1097,61 @@ def reconstruct_sequence(
     DegenerateConfigurationError
         No pair of frames with enough matches and parallax to start from, or none whose
         pose triangulates 30 points (five pairs tried).
+    """
+    cache: dict[str, Any] = {}
+    kw: dict[str, Any] = {
+        "window": window,
+        "max_features": max_features,
+        "ratio": ratio,
+        "threshold_px": threshold_px,
+        "rng": rng,
+        "masks": masks,
+        "contrast_threshold": contrast_threshold,
+        "cache": cache,
+    }
+    best = _reconstruct(images, K, distortion, **kw, starts=None)
+    n = len(images)
+    # one model holds fewer than half the frames: the sequence may have a larger part its
+    # start could not reach (a weak link between two parts); COLMAP makes several models
+    # and keeps the largest: a start among the frames left out, twice at most
+    for _ in range(2):
+        nreg = int(best.registered.sum())
+        if 2 * nreg >= n:
+            break
+        left = frozenset(np.flatnonzero(~best.registered).tolist())
+        try:
+            other = _reconstruct(images, K, distortion, **kw, starts=left)
+        except DegenerateConfigurationError:  # no pair among them to start from
+            break
+        if int(other.registered.sum()) <= nreg:
+            break
+        note = (
+            f"another start among the {len(left)} frames a model of {nreg} frames left out "
+            f"registered {int(other.registered.sum())}: kept (the larger model)"
+        )
+        best = replace(other, notes=[*other.notes, note])
+    return best
+
+
+def _reconstruct(
+    images: Sequence[ArrayLike],
+    K: ArrayLike,
+    distortion: DistortionModel | None,
+    *,
+    window: int,
+    max_features: int,
+    ratio: float,
+    threshold_px: float,
+    rng: int,
+    masks: ArrayLike | Sequence[ArrayLike | None] | None,
+    contrast_threshold: float,
+    cache: dict[str, Any],
+    starts: frozenset[int] | None,
+) -> Reconstruction:
+    """Reconstruct one model (:func:`reconstruct_sequence`), started from a pair in ``starts``.
+
+    ``starts``: the frames an initial pair may have both of (None: any). ``cache`` keeps
+    the keypoints and the verified pairs between the calls of one sequence.
     """
     from imageform.geometry.pnp_ransac import solve_pnp_ransac
     from imageform.geometry.relative_pose import recover_pose
@@ -1116,10 +1178,12 @@ def reconstruct_sequence(
     else:
         one = _as_mask(masks, shape, "masks")
         per_frame = [one] * n
-    feats = [
-        detect_features(im, max_features=max_features, mask=m, contrast_threshold=ct)
-        for im, m in zip(images, per_frame, strict=True)
-    ]
+    if "feats" not in cache:
+        cache["feats"] = [
+            detect_features(im, max_features=max_features, mask=m, contrast_threshold=ct)
+            for im, m in zip(images, per_frame, strict=True)
+        ]
+    feats = cache["feats"]
     # undistorted (ideal pinhole) pixels of every keypoint
     ideal: list[F64] = []
     for feat in feats:
@@ -1216,15 +1280,20 @@ def reconstruct_sequence(
         ang = float(np.median(_angle_deg(np.zeros(3), C2, X[fin]))) if fin.any() else 0.0
         pair_info[(i, j)] = (int(inl.sum()), ang, m[inl])
 
-    for i in range(n):
-        for j in range(i + 1, min(n, i + 1 + win)):
+    if "pairs" in cache:  # a second start: the pairs verified for the first
+        pair_info, pair_rot, pair_dir, seen = cache["pairs"]
+    else:
+        for i in range(n):
+            for j in range(i + 1, min(n, i + 1 + win)):
+                verify(i, j)
+        for i, j in _similar_pairs([f.descriptors for f in feats], win, 2, rng):
             verify(i, j)
-    for i, j in _similar_pairs([f.descriptors for f in feats], win, 2, rng):
-        verify(i, j)
-    # a pair whose whole support is a mirrored texture's copies (its pose half a turn off,
-    # no match behind a camera) breaks the loops of three frames it is in: it goes
-    for key in _inconsistent_pairs(pair_rot, support={q: v[0] for q, v in pair_info.items()}):
-        del pair_info[key]
+        # a pair whose whole support is a mirrored texture's copies (its pose half a turn
+        # off, no match behind a camera) breaks the loops of three frames it is in: it goes
+        support = {q: v[0] for q, v in pair_info.items()}
+        for key in _inconsistent_pairs(pair_rot, support=support):
+            del pair_info[key]
+        cache["pairs"] = (pair_info, pair_rot, pair_dir, seen)
     if not pair_info:
         raise DegenerateConfigurationError(
             "no pair of frames has 30 verified matches: too little overlap or texture "
@@ -1261,6 +1330,10 @@ def reconstruct_sequence(
     if not cands:
         cands = [(v[0], key) for key, v in pair_info.items() if key[1] - key[0] <= win]
         notes.append("no pair with 2 degrees of parallax: started from the best matched one")
+    if starts is not None:
+        cands = [c for c in cands if c[1][0] in starts and c[1][1] in starts]
+        if not cands:
+            raise DegenerateConfigurationError("no pair among the frames left out to start from")
     Rs = np.full((n, 3, 3), np.nan)
     ts = np.full((n, 3), np.nan)
     registered = np.zeros(n, bool)
