@@ -66,8 +66,9 @@ def test_white_balance_command(pair, tmp_path, capsys) -> None:  # type: ignore[
     assert main(["white-balance", str(a), "-o", str(tif), "--method", "white-patch"]) == 0
     assert "gains" in capsys.readouterr().out
     x = str(tmp_path / "x.png")
-    assert main(["white-balance", str(a), "-o", x, "--method", "shades-of-gray", "--p", "0.5"]) == 1
-    assert "p >= 1" in capsys.readouterr().err
+    # a usage error (exit 2) naming the flag, before the image is read (clipolish)
+    assert main(["white-balance", str(a), "-o", x, "--method", "shades-of-gray", "--p", "0.5"]) == 2
+    assert "expected --p >= 1, got 0.5" in capsys.readouterr().err
     y = str(tmp_path / "y.png")
     assert main(["white-balance", str(a), "-o", y, "--method", "nope"]) == 2
     assert "gray-world" in capsys.readouterr().err
