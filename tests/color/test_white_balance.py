@@ -285,7 +285,7 @@ def test_default_percentiles_per_method() -> None:
         b = estimate_illuminant(img, method, transfer="linear", percentile=q)
         np.testing.assert_array_equal(a, b)
     a = estimate_illuminant(img, "pca", transfer="linear")
-    b = estimate_illuminant(img, "pca", transfer="linear", percentile=99.0)
+    b = estimate_illuminant(img, "pca", transfer="linear", percentile=20.0)  # (0, 50] for pca
     assert not np.allclose(a, b)
 
 
@@ -408,3 +408,25 @@ def test_grayness_index_and_pca_backends_on_a_coloured_scene(xp_name: str, metho
     ref = estimate_illuminant(img, method, transfer="linear", percentile=5.0)
     got = estimate_illuminant(to_backend(img, xp_name), method, transfer="linear", percentile=5.0)
     np.testing.assert_allclose(to_np(got), ref, rtol=1e-9)
+
+
+@pytest.mark.parametrize("q", [0.0, 50.5, 80.0, 100.0])
+def test_pca_percentile_beyond_half_is_refused(q: float) -> None:
+    """pca takes the q % darkest and the q % brightest pixels (Cheng et al. 2014: 3.5 %):
+    beyond 50 the two sets overlap; 80 was accepted and balanced something."""
+    from imageform.color import white_balance
+
+    img = np.random.default_rng(0).uniform(0.1, 0.9, (16, 16, 3))
+    with pytest.raises(InvalidInputError, match=r"expected percentile in \(0, 50\] for pca"):
+        white_balance(img, method="pca", percentile=q, transfer="linear")
+    white_balance(img, method="pca", percentile=50.0, transfer="linear")  # the bound is kept
+
+
+def test_white_patch_at_a_black_percentile_says_why() -> None:
+    from imageform.color import white_balance
+    from imageform.errors import DegenerateConfigurationError
+
+    img = np.random.default_rng(0).uniform(0.1, 0.9, (16, 16, 3))
+    img[:4] = 0.0  # a black band: the low percentiles of every channel are 0
+    with pytest.raises(DegenerateConfigurationError, match="the 1th percentile of a channel"):
+        white_balance(img, method="white_patch", percentile=1.0, transfer="linear")

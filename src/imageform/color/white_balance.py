@@ -271,13 +271,20 @@ def _manual(xp: Any, like: Any, illuminant: Any, cct: float | None, space: str) 
     return xp.broadcast_to(e, (*tuple(like.shape[:-3]), 3))
 
 
-def _check_estimate(e: np.ndarray) -> np.ndarray:
+def _check_estimate(e: np.ndarray, why: str = "an empty channel?") -> np.ndarray:
     if not np.all(e > 0):
         raise DegenerateConfigurationError(
             f"the image's illuminant estimate {np.round(e, 6).tolist()!s:.60} has a zero (or "
-            "negative) channel: no gain balances it (an empty channel?)"
+            f"negative) channel: no gain balances it ({why})"
         )
     return e
+
+
+def _why_zero(method: str, percentile: float) -> str:
+    """Say why a method's estimate can have an empty channel, for :func:`_check_estimate`."""
+    if method == "white_patch" and percentile < 50.0:
+        return f"the {percentile:g}th percentile of a channel is black: take a higher percentile"
+    return "an empty channel?"
 
 
 def _check_params(
@@ -292,6 +299,11 @@ def _check_params(
     percentile = as_real(percentile, "percentile")
     if not 0.0 <= percentile <= 100.0:
         raise InvalidInputError(f"expected percentile in [0, 100], got {percentile:g}")
+    if method == "pca" and not 0.0 < percentile <= 50.0:  # two sets of that share each
+        raise InvalidInputError(
+            "expected percentile in (0, 50] for pca (the share of darkest and of brightest "
+            f"pixels, Cheng et al. 2014: 3.5), got {percentile:g}"
+        )
     p = as_real(p, "Minkowski p", minimum=1.0, maximum=MAX_MINKOWSKI_P)
     sigma = as_real(sigma, "sigma", nonnegative=True, maximum=MAX_SIGMA)
     if cct is not None:
@@ -686,10 +698,11 @@ def _gains(
     space: str,
 ) -> Any:
     e = _estimate(xp, lin, m, percentile, p, sigma, illuminant, cct, space)
+    why = _why_zero(m, float(percentile))
     if is_dask_namespace(xp):
-        e = e.map_blocks(_check_estimate, dtype=e.dtype)  # lazily: raises at compute
+        e = e.map_blocks(_check_estimate, why, dtype=e.dtype)  # lazily: raises at compute
     elif any_value(~(e > 0), xp):
-        _check_estimate(np.asarray(e))
+        _check_estimate(np.asarray(e), why)
     ref = xp.mean(e, axis=-1, keepdims=True) if norm == "mean" else e[..., 1:2]
     return ref / e
 

@@ -376,7 +376,7 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
         None,
         help="white-patch: percentile of each channel (0-100; default 99, max-rgb 100); "
         "grayness-index: percent of the pixels taken as grey (default 0.1); pca: percent "
-        "of darkest and of brightest pixels (default 3.5).",
+        "of darkest and of brightest pixels (default 3.5, at most 50).",
         minimum=0,
         maximum=100,
     )
