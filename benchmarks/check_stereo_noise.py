@@ -125,6 +125,7 @@ def _ad_census(lam_census: float = 12.0, lam_ad: float = 20.0) -> Fn:
         z, off = np.float32(0), np.float32(-1)
         cl, cr = sgm.census(gl, 2, z, off), sgm.census(gr, 2, z, off)
         ham = sgm.cost_volume(cl, cr, lo, n, 24, np.empty((h, w, n), np.uint8))
+        ham = ham.astype(np.float32)
         ad = np.full((h, w, n), 255.0, np.float32)
         for k in range(n):
             d = lo + k
