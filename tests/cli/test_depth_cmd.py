@@ -155,6 +155,22 @@ def test_depth_census_threshold_option(files: tuple[Path, StereoScene], tmp_path
     assert main([*base, "--census-threshold", "-1", "-o", str(tmp_path / "x.npy")]) == 2
 
 
+def test_depth_census_step_option(files: tuple[Path, StereoScene], tmp_path: Path) -> None:
+    """--census-step reaches stereo_disparity: 4 is the default (the graded census), 0 the
+    plain census (stereo_disparity's census_step=None, the same map), and -1 exits 2."""
+    d, _ = files
+    base = ["depth", str(d / "left.png"), str(d / "right.png"), "--camera", str(d / "rig.toml")]
+    base += ["--num-disparities", "48", "--disparity"]
+    maps = []
+    for extra in ([], ["--census-step", "4"], ["--census-step", "0"]):
+        out = tmp_path / f"s{len(maps)}.npy"
+        assert main([*base, *extra, "-o", str(out)]) == 0
+        maps.append(np.load(out))
+    np.testing.assert_array_equal(maps[0], maps[1])
+    assert not np.array_equal(maps[0], maps[2], equal_nan=True)
+    assert main([*base, "--census-step", "-1", "-o", str(tmp_path / "x.npy")]) == 2
+
+
 #: the vertical rig: the right camera 60 mm below the left (or above: y negated), turned 2 deg
 R_VERT = np.asarray(rvec_to_matrix([0.02, 0.01, -0.03]))
 T_VERT = np.array([1.5, -60.0, 2.0])

@@ -44,23 +44,27 @@ def small():  # type: ignore[no-untyped-def]
 @pytest.mark.parametrize(
     "args",
     [
-        (0, 16, 5, 3, 96, False, 0.1, 1.0, 0, 1.0, True, False, 0.0),
-        (0, 16, 5, 3, 96, False, 0.1, 1.0, 0, 1.0, False, False, 0.0),
-        (-3, 21, 3, 2, 40, True, 0.05, 0.0, 20, 1.0, True, False, 0.0),
-        (2, 13, 7, 6, 200, True, 0.0, -1.0, 5, 2.0, False, False, 0.0),
-        (0, 16, 5, 3, 96, False, 0.1, 1.0, 0, 1.0, True, True, 2.5),  # census threshold
-        (-3, 21, 7, 6, 200, True, 0.05, 1.0, 5, 1.0, False, False, 0.7),
+        (0, 16, 5, 3, 96, False, 0.1, 1.0, 0, 1.0, True, False, 0.0, -1.0),
+        (0, 16, 5, 3, 96, False, 0.1, 1.0, 0, 1.0, False, False, 0.0, -1.0),
+        (-3, 21, 3, 2, 40, True, 0.05, 0.0, 20, 1.0, True, False, 0.0, -1.0),
+        (2, 13, 7, 6, 200, True, 0.0, -1.0, 5, 2.0, False, False, 0.0, -1.0),
+        (0, 16, 5, 3, 96, False, 0.1, 1.0, 0, 1.0, True, True, 2.5, -1.0),  # census threshold
+        (-3, 21, 7, 6, 200, True, 0.05, 1.0, 5, 1.0, False, False, 0.7, -1.0),
+        (0, 16, 5, 16, 64, False, 0.1, 1.0, 0, 1.0, True, False, 0.0, 4.0),  # graded census
+        (-3, 21, 3, 5, 20, True, 0.05, 1.0, 5, 1.0, False, True, 0.7, 1.5),
+        (2, 13, 5, 16, 64, False, 0.0, -1.0, 0, 1.0, True, False, 1.0, 0.0),
     ],
 )
 def test_kernels_and_twins_give_the_same_numbers(small, args) -> None:  # type: ignore[no-untyped-def]
     gl, gr = _grey(small.left, "left"), _grey(small.right, "right")
     r = args[2] // 2
-    nbits = args[2] ** 2 - 1
-    thr = np.float32(args[12])
-    codes = sgm.census(gl, r, thr), twin.census(gl, r, thr)
+    nbits = (args[2] ** 2 - 1) * (2 if args[13] >= 0 else 1)
+    thr, step = np.float32(args[12]), np.float32(args[13])
+    codes = sgm.census(gl, r, thr, step), twin.census(gl, r, thr, step)
     np.testing.assert_array_equal(*codes)
+    assert int(codes[0].max()) < 2**nbits
     costs = [
-        m.cost_volume(c, m.census(gr, r, thr), args[0], args[1], nbits)
+        m.cost_volume(c, m.census(gr, r, thr, step), args[0], args[1], nbits)
         for m, c in ((sgm, codes[0]), (twin, codes[1]))
     ]
     np.testing.assert_array_equal(*costs)
@@ -86,6 +90,8 @@ def test_the_public_call_without_numba_is_the_twin(
     kws = [
         {"num_disparities": 16, "speckle_size": 10, "adaptive_p2": True},
         {"num_disparities": 16, "median_filter": True, "subpixel": "parabola"},
+        {"num_disparities": 16, "census_step": None, "census_threshold": 1.0},
+        {"num_disparities": 16, "block_size": 3, "census_step": 2.0},
     ]
     a = [stereo_disparity(small.left, small.right, **kw) for kw in kws]
     monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
@@ -269,14 +275,15 @@ def test_grey_colour_and_integer_images(small) -> None:  # type: ignore[no-untyp
 
 
 def test_default_penalties(small) -> None:  # type: ignore[no-untyped-def]
-    """p1 = (block_size² - 1) // 3, p2 = 4 p1, or 32 p1 with the adaptive P2."""
+    """p1 = a third of the code's bits ((block_size² - 1) // 3 plain, twice that graded),
+    p2 = 4 p1, or 32 p1 with the adaptive P2."""
     L, R = small.left, small.right
-    for bs, p1 in ((3, 2), (5, 8), (7, 16)):
+    cases = [(3, 2, None), (5, 8, None), (7, 16, None), (3, 5, 4.0), (5, 16, 4.0), (7, 16, 4.0)]
+    for bs, p1, step in cases:
         for adaptive, p2 in ((False, 4 * p1), (True, 32 * p1)):
-            ref = stereo_disparity(
-                L, R, num_disparities=16, block_size=bs, p1=p1, p2=p2, adaptive_p2=adaptive
-            )
-            got = stereo_disparity(L, R, num_disparities=16, block_size=bs, adaptive_p2=adaptive)
+            kw = {"num_disparities": 16, "block_size": bs, "adaptive_p2": adaptive}
+            ref = stereo_disparity(L, R, p1=p1, p2=p2, census_step=step, **kw)
+            got = stereo_disparity(L, R, census_step=step, **kw)
             np.testing.assert_array_equal(got, ref)
 
 
@@ -415,8 +422,24 @@ def test_census_threshold_sets_a_bit_only_past_it() -> None:
     for m in (sgm, twin):
         # bits from the top-left neighbour down to the bottom-right one, the centre skipped
         for thr, bits in ((0.0, "11100000"), (1.0, "01100000"), (2.0, "01000000")):
-            code = int(m.census(img, 1, np.float32(thr))[1, 1])
+            code = int(m.census(img, 1, np.float32(thr), np.float32(-1))[1, 1])
             assert format(code, "08b") == bits, (m, thr)
+
+
+def test_graded_census_sets_a_second_bit_past_the_step() -> None:
+    """Graded: two bits a neighbour, darker than the centre by more than the threshold, and by
+    more than the threshold + the step; Hamming distances 0, 1 or 2 a neighbour."""
+    img = np.full((3, 3), 100.0, dtype=np.float32)
+    img[0, 0], img[0, 1], img[0, 2], img[1, 0] = 99.0, 95.0, 97.5, 101.0
+    for m in (sgm, twin):
+        for thr, step, bits in (
+            (0.0, 4.0, "1011100000000000"),
+            (0.0, 2.0, "1011110000000000"),
+            (1.0, 2.0, "0011100000000000"),
+            (0.0, 0.0, "1111110000000000"),
+        ):
+            code = int(m.census(img, 1, np.float32(thr), np.float32(step))[1, 1])
+            assert format(code, "016b") == bits, (m, thr, step)
 
 
 def _flat_squares(shift: int = 9) -> tuple[np.ndarray, np.ndarray]:
@@ -453,10 +476,14 @@ def test_census_threshold_matches_flat_squares_with_faint_shading() -> None:
         ok = np.isfinite(v)
         return float(ok.mean()), float(np.mean(np.abs(v[ok] - 9) > 1))
 
-    plain = scores(stereo_disparity(left, right, num_disparities=16))
+    plain = scores(stereo_disparity(left, right, num_disparities=16, census_step=None))
     assert plain[1] > 0.25 and plain[0] < 0.9
     for thr in (2, 4.0):
-        dens, bad = scores(stereo_disparity(left, right, num_disparities=16, census_threshold=thr))
+        dens, bad = scores(
+            stereo_disparity(
+                left, right, num_disparities=16, census_threshold=thr, census_step=None
+            )
+        )
         assert dens > 0.99 and bad < 0.002, (thr, dens, bad)
     m = cv2.StereoSGBM_create(
         0, 16, 5, P1=200, P2=800, disp12MaxDiff=1, uniquenessRatio=10,
@@ -467,9 +494,61 @@ def test_census_threshold_matches_flat_squares_with_faint_shading() -> None:
     assert 0.005 < scores(ref)[1] < 0.05  # OpenCV: 1.9 %
     # 0 is the plain census, bit for bit
     np.testing.assert_array_equal(
-        stereo_disparity(left, right, num_disparities=16, census_threshold=0.0),
-        stereo_disparity(left, right, num_disparities=16),
+        stereo_disparity(left, right, num_disparities=16, census_threshold=0.0, census_step=None),
+        stereo_disparity(left, right, num_disparities=16, census_step=None),
     )
+
+
+def test_graded_census_is_the_default_and_matches_flat_squares() -> None:
+    """The default graded census (step 4) on the flat squares with faint shading: the
+    shading's bits weigh half. Measured: 3.8 % of pixels more than 1 px off and 96.5 % valid
+    (plain census 31.9 % and 82.3 %)."""
+    left, right = _flat_squares()
+    d = stereo_disparity(left, right, num_disparities=16)
+    v = d[4:-4, 20:-4]
+    ok = np.isfinite(v)
+    assert ok.mean() > 0.95 and np.mean(np.abs(v[ok] - 9) > 1) < 0.06
+    np.testing.assert_array_equal(
+        d, stereo_disparity(left, right, num_disparities=16, census_step=4)
+    )
+    # step 0: every cost and default penalty doubled, the plain census's map
+    np.testing.assert_array_equal(
+        stereo_disparity(left, right, num_disparities=16, census_step=0.0),
+        stereo_disparity(left, right, num_disparities=16, census_step=None),
+    )
+    # a 7 x 7 window's 48 bits fill the code: the plain census
+    np.testing.assert_array_equal(
+        stereo_disparity(left, right, num_disparities=16, block_size=7),
+        stereo_disparity(left, right, num_disparities=16, block_size=7, census_step=None),
+    )
+
+
+def test_graded_census_keeps_faint_texture_a_threshold_drops() -> None:
+    """Texture of some 2 grey levels RMS with sensor noise: a threshold of 4 loses it, the
+    graded census (whose first bit keeps every difference) matches it almost as the plain one.
+    Measured, > 1 px off: plain 0.8 %, graded 1.1 %, threshold 4 5.6 % (92.4 % valid)."""
+    s = render_pair(160, 120, f=200.0, ss=2, seed=3)  # disparities 9.3 to 17.4 px
+    rng = np.random.default_rng(1)
+
+    def u8(x: np.ndarray) -> np.ndarray:
+        v = 100 + 2 * (x - 0.5) / s.left.std() + rng.normal(0, 0.7, x.shape)
+        return np.clip(np.round(v), 0, 255).astype(np.uint8)
+
+    left, right = u8(s.left), u8(s.right)
+    region = s.visible.copy()
+    region[:, :32] = False
+
+    def bad(step: float | None = 4.0, threshold: float = 0.0) -> float:
+        d = stereo_disparity(
+            left, right, num_disparities=32, census_step=step, census_threshold=threshold
+        )
+        ok = region & np.isfinite(d)
+        assert ok.sum() > 0.9 * region.sum()
+        return float(np.mean(np.abs(d - s.disparity)[ok] > 1))
+
+    plain, graded = bad(None), bad()
+    assert graded < 0.02 and graded < plain + 0.01, (plain, graded)
+    assert bad(None, 4.0) > 2 * graded
 
 
 def test_bad_input_is_refused_in_one_line(small) -> None:  # type: ignore[no-untyped-def]
@@ -489,6 +568,10 @@ def test_bad_input_is_refused_in_one_line(small) -> None:  # type: ignore[no-unt
         ((L, R), {"census_threshold": -1.0}, "census_threshold"),
         ((L, R), {"census_threshold": 300.0}, "census_threshold"),
         ((L, R), {"census_threshold": float("nan")}, "census_threshold"),
+        ((L, R), {"census_step": -1.0}, "census_step"),
+        ((L, R), {"census_step": 300.0}, "census_step"),
+        ((L, R), {"census_step": float("nan")}, "census_step"),
+        ((L, R), {"census_step": -1.0, "block_size": 7}, "census_step"),
         ((np.where(L > 0.5, np.nan, L), R), {}, "left"),
         ((L, np.full_like(R, np.inf)), {}, "right"),
         ((L[..., None].repeat(2, axis=2), R[..., None].repeat(2, axis=2)), {}, "grey"),

@@ -165,7 +165,7 @@ PLANS: dict[str, Plan] = {
             Entry("sgm", "median3", "(float32[:, ::1],)"),
         ),
         here=(
-            Entry("sgm", "census", "(float32[:, ::1], int64, float32)"),
+            Entry("sgm", "census", "(float32[:, ::1], int64, float32, float32)"),
             Entry(
                 "sgm",
                 "cost_volume",

@@ -6,7 +6,8 @@ PAMI 30(2), 2008. The steps, each a kernel here with its NumPy twin in
 
 * :func:`census`: the census transform of an image over a ``block_size`` window (R. Zabih,
   J. Woodfill, ECCV 1994): one bit per neighbour, set where the neighbour is darker than the
-  centre, neighbours in raster order, the image's border replicated.
+  centre, neighbours in raster order, the image's border replicated; graded, two bits per
+  neighbour (darker, and darker by more than a step).
 * :func:`cost_volume`: the Hamming distance of the left pixel's code and the right code at
   ``x - d`` for every disparity ``d`` (``uint8``); a disparity that leaves the right image
   costs the most a code can (its bit count).
@@ -62,11 +63,13 @@ def popcount64(v):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
 
 
 @njit
-def census(img, r, threshold):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def census(img, r, threshold, step):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """Census codes ``uint64 (H, W)`` of ``img`` (float32, H x W) over a ``2r+1`` window.
 
     A neighbour's bit is set where it is darker than the centre by more than ``threshold``
-    (float32, >= 0; 0 is the plain census).
+    (float32, >= 0; 0 is the plain census). With ``step >= 0`` (the graded census) each
+    neighbour gives two bits, that one and, after it, one set where the neighbour is darker by
+    more than ``threshold + step``: ``2 ((2r+1)² - 1)`` bits, at most 48 (``r <= 2``).
     """
     h, w = img.shape
     pad = np.empty((h + 2 * r, w + 2 * r), dtype=np.float32)  # the border replicated
@@ -77,9 +80,11 @@ def census(img, r, threshold):  # type: ignore[no-untyped-def]  # pragma: no cov
             row[xx] = src[min(max(xx - r, 0), w - 1)]
     out = np.zeros((h, w), dtype=np.uint64)
     one = np.uint64(1)
+    graded = step >= 0
     for y in range(h):
         code = out[y]
         c = img[y] - threshold  # float32: the twin's arithmetic
+        c2 = c - step
         for dy in range(-r, r + 1):
             nb = pad[y + r + dy]
             for dx in range(-r, r + 1):
@@ -89,6 +94,10 @@ def census(img, r, threshold):  # type: ignore[no-untyped-def]  # pragma: no cov
                 for x in range(w):  # one neighbour for the whole row: vectorised
                     bit = one if nb[x + o] < c[x] else np.uint64(0)
                     code[x] = (code[x] << one) | bit
+                if graded:
+                    for x in range(w):
+                        bit = one if nb[x + o] < c2[x] else np.uint64(0)
+                        code[x] = (code[x] << one) | bit
     return out
 
 

@@ -24,22 +24,28 @@ def _popcount(v: NDArray[np.uint64]) -> NDArray[np.uint8]:
     return _POP8[b].sum(axis=-1, dtype=np.uint8)
 
 
-def census(img: NDArray[np.float32], r: int, threshold: np.float32) -> NDArray[np.uint64]:
+def census(
+    img: NDArray[np.float32], r: int, threshold: np.float32, step: np.float32
+) -> NDArray[np.uint64]:
     """Census codes of ``img``, ``2r+1`` window (the kernel's bit order, border replicated).
 
-    A bit is set where the neighbour is darker than the centre by more than ``threshold``.
+    A bit is set where the neighbour is darker than the centre by more than ``threshold``;
+    with ``step >= 0`` a second bit after it where darker by more than ``threshold + step``.
     """
     h, w = img.shape
     pad = np.pad(img, r, mode="edge")
     code = np.zeros((h, w), dtype=np.uint64)
     one = np.uint64(1)
     centre = img - np.float32(threshold)  # float32, as the kernel
+    centre2 = centre - np.float32(step)
     for dy in range(-r, r + 1):
         for dx in range(-r, r + 1):
             if dy == 0 and dx == 0:
                 continue
             nb = pad[r + dy : r + dy + h, r + dx : r + dx + w]
             code = (code << one) | (nb < centre).astype(np.uint64)
+            if step >= 0:
+                code = (code << one) | (nb < centre2).astype(np.uint64)
     return code
 
 

@@ -42,6 +42,9 @@ __all__ = ["disparity_to_depth", "disparity_to_points", "stereo_disparity"]
 MAX_P2 = 8000
 #: block sizes of the census window (its code holds block_size² - 1 <= 48 bits)
 BLOCK_SIZES = (3, 5, 7)
+#: the default ``census_step`` of :func:`stereo_disparity` (grey levels, 0-255): chosen on the
+#: tuning pairs of ``benchmarks/check_stereo_noise.py`` (its table: steps 2, 4 and 8)
+CENSUS_STEP = 4.0
 #: the sub-pixel fits of :func:`stereo_disparity`
 SUBPIXEL_FITS = ("equiangular", "parabola")
 
@@ -85,6 +88,7 @@ def stereo_disparity(
     subpixel: Literal["equiangular", "parabola"] = "equiangular",
     median_filter: bool = False,
     census_threshold: float = 0.0,
+    census_step: float | None = CENSUS_STEP,
 ) -> NDArray[np.float32]:
     r"""Disparity of a rectified stereo pair by semi-global matching on census costs.
 
@@ -94,7 +98,10 @@ def stereo_disparity(
 
     1. **Cost**: the Hamming distance of the census codes (R. Zabih & J. Woodfill 1994) of
        the ``block_size`` x ``block_size`` windows about ``(x, y)`` and ``(x - d, y)``:
-       one bit per neighbour, set where it is darker than the centre. Census, not
+       one bit per neighbour, set where it is darker than the centre, and (the graded
+       census, ``census_step``) a second bit set where it is darker by more than
+       ``census_step`` grey levels: a neighbour a grey level or two darker in one view and
+       not in the other costs 1, one clearly darker in one and not in the other 2. Census, not
        OpenCV's Birchfield-Tomasi: it depends only on the order of intensities, so a gain
        or offset between the two cameras (an endoscope's two sensors, auto-exposure)
        changes nothing, and it was the most robust cost of Hirschmüller & Scharstein's
@@ -157,8 +164,10 @@ def stereo_disparity(
         Side of the census window (8, 24 or 48 bits a pixel).
     p1, p2 : int, optional
         Penalties of a disparity step of 1 and of a larger one along a path, in bits of
-        Hamming distance (``0 < p1 < p2 <= 8000``). Defaults ``p1 = (block_size² - 1) / 3``
-        and ``p2 = 4 p1`` (8 and 32 for 5 x 5: of 26 pairs tried on Middlebury's cones, one
+        Hamming distance (``0 < p1 < p2 <= 8000``). Defaults ``p1`` a third of the code's
+        bits (``(block_size² - 1) / 3``, twice that for the graded census) and ``p2 = 4 p1``
+        (16 and 64 for the graded 5 x 5 census; 8 and 32 for the plain one: of 26 pairs tried
+        on Middlebury's cones, one
         of the five at its best density with its share of errors over 3 px kept, taken for
         its figures on the other pairs of ``benchmarks/check_stereo_depth.py`` and its
         plain rule); with ``adaptive_p2``, ``p2 = 32 p1`` (the ``P2'`` that the intensity
@@ -193,18 +202,33 @@ def stereo_disparity(
         Apply OpenCV's 3 x 3 median to the map (step 5).
     census_threshold : float
         Grey levels (on a 0-255 scale, ``>= 0``) by which a neighbour must be darker than
-        the centre to set its census bit (0, the default: any darker neighbour). In flat
-        regions (the squares of a board, a dim endoscope's tissue, Middlebury tsukuba's
-        walls) the plain census bits are set by differences of a grey level or two that the
-        two cameras do not share, and their costs scatter the disparity; with a threshold
-        such regions cost the same at every disparity and the paths carry the disparity of
-        their edges in, as OpenCV's Birchfield-Tomasi costs do. It also drops fine texture
-        of low contrast: on the da Vinci endoscope's board pairs of
-        ``benchmarks/check_stereo_fresh.py`` the share of disparities more than 1 px off
-        the board's plane falls from 33.6 % (0) to 3.9 % (4; OpenCV 13.6 %), but on a street
-        pair there 57.5 % of the pixels keep a disparity instead of 65.1 %. The census then
-        depends on the images' contrast: a gain between the cameras changes the bits near
-        the threshold.
+        the centre to set its census bit (0, the default: any darker neighbour); with the
+        graded census its second bit needs ``census_threshold + census_step``. With the plain
+        census (``census_step=None``) in flat regions (the squares of a board, a dim
+        endoscope's tissue, Middlebury tsukuba's walls) the bits are set by differences of a
+        grey level or two that the two cameras do not share, and their costs scatter the
+        disparity; a threshold makes such regions cost the same at every disparity, and the
+        paths carry the disparity of their edges in, as OpenCV's Birchfield-Tomasi costs do,
+        but it drops fine texture of low contrast too: on
+        ``benchmarks/check_stereo_noise.py``'s pairs, plain census, threshold 4, the share of
+        disparities more than 1 px off falls from 33.6 % to 3.9 % on the da Vinci endoscope's
+        board pairs and rises from 9.9 % to 16.1 % on Middlebury's Adirondack. The census
+        then depends on the images' contrast: a gain between the cameras changes the bits
+        near the threshold.
+    census_step : float or None
+        Grey levels (0-255 scale, ``>= 0``) of the graded census's second bit (default 4):
+        each neighbour costs 0, 1 or 2 by how far the two views disagree on it (darker, or
+        darker by more than the step), so faint shading and noise weigh half as much as
+        texture while texture of low contrast still counts. On
+        ``benchmarks/check_stereo_noise.py``'s tuning pairs (steps 2, 4, 8 tried) it
+        lowers the share of disparities more than 1 px off on every real pair against the plain
+        census: da Vinci endoscope board pairs 33.6 % to 8.9 % (OpenCV 13.6 %),
+        Adirondack 9.9 % to 7.3 %, tsukuba 6.5 % to 5.1 %, as dense on street pairs
+        (69.7 % valid against 69.6 %); the share more than 3 px off rises by up to 0.14
+        point on Middlebury's Adirondack pairs, cones and teddy. None: the plain census of
+        one bit per neighbour (the default before; step 0 gives its map too, every cost and
+        default penalty doubled). A 7 x 7 window's 48 bits fill the 64-bit code:
+        ``block_size=7`` always takes the plain census.
 
     Returns
     -------
@@ -249,7 +273,12 @@ def stereo_disparity(
     bs = as_int(block_size, "block_size")
     if bs not in BLOCK_SIZES:
         raise InvalidInputError(f"expected block_size 3, 5 or 7 (the census window), got {bs}")
-    nbits = bs * bs - 1
+    thr = as_real(census_threshold, "census_threshold", minimum=0.0, maximum=255.0)
+    step = -1.0
+    if census_step is not None:
+        step = as_real(census_step, "census_step", minimum=0.0, maximum=255.0)
+        step = step if bs < 7 else -1.0  # a 7 x 7 window's 48 bits fill the code alone
+    nbits = (bs * bs - 1) * (2 if step >= 0 else 1)
     P1 = max(1, nbits // 3) if p1 is None else as_int(p1, "p1", minimum=1, maximum=MAX_P2 - 1)
     if not isinstance(adaptive_p2, bool | np.bool_):
         raise TypeError(f"expected adaptive_p2 as a bool, got {describe(adaptive_p2)}")
@@ -273,7 +302,6 @@ def stereo_disparity(
     equiangular = check_option(subpixel, SUBPIXEL_FITS, "subpixel") == "equiangular"
     if not isinstance(median_filter, bool | np.bool_):
         raise TypeError(f"expected median_filter as a bool, got {describe(median_filter)}")
-    thr = as_real(census_threshold, "census_threshold", minimum=0.0, maximum=255.0)
     check_memory(3.0 * h * w * n_d, "num_disparities", f"the costs of {h} x {w} px x {n_d}")
     if use_numba(gl):
         from imageform._kernels import sgm as kern
@@ -283,7 +311,7 @@ def stereo_disparity(
         gl, gr = np.ascontiguousarray(gl.T), np.ascontiguousarray(gr.T)
     d = _match(
         kern, gl, gr, min_d, n_d, bs, P1, P2, bool(adaptive_p2), u, lr, sp, sr, equiangular,
-        bool(median_filter), thr,
+        bool(median_filter), thr, step,
     )  # fmt: skip
     return np.ascontiguousarray(d.T) if vertical else d
 
@@ -305,16 +333,18 @@ def _match(
     equiangular: bool = True,
     median: bool = False,
     census_threshold: float = 0.0,
+    census_step: float = -1.0,
 ) -> NDArray[np.float32]:
     """Run the pipeline on checked grey images with the kernels (or twins) of module ``kern``."""
     r = bs // 2
-    thr = np.float32(census_threshold)
-    cl = kern.census(gl, r, thr)
-    cr = kern.census(gr, r, thr)
+    thr, step = np.float32(census_threshold), np.float32(census_step)
+    cl = kern.census(gl, r, thr, step)
+    cr = kern.census(gr, r, thr, step)
+    nbits = (bs * bs - 1) * (2 if census_step >= 0 else 1)
     # the volumes allocated by NumPy, not in the kernels: NumPy asks Linux for huge pages
     # (madvise), numba does not, and 4 kB pages cost a fifth of the matching's time in faults
     h, w = gl.shape
-    cost = kern.cost_volume(cl, cr, min_d, n_d, bs * bs - 1, np.empty((h, w, n_d), np.uint8))
+    cost = kern.cost_volume(cl, cr, min_d, n_d, nbits, np.empty((h, w, n_d), np.uint8))
     total = np.empty((h, w, n_d), dtype=np.uint16)
     disp = kern.match(
         cost, gl, p1, p2, adaptive, min_d, float(uniqueness), float(lr), total, equiangular

@@ -432,8 +432,17 @@ class DepthOptions(ImageIn):
     census_threshold: float = option(
         0.0,
         help="Grey levels (0-255) by which a neighbour must be darker than the centre to "
-        "count in the census (0: any darker). 2-4 for views with flat regions (a board's "
-        "squares, a dim endoscope): fewer errors there, less fine texture matched.",
+        "count in the census (0: any darker). With --census-step 0, 2-4 for views with flat "
+        "regions (a board's squares, a dim endoscope): fewer errors there, less fine texture "
+        "matched.",
+        minimum=0.0,
+        maximum=255.0,
+    )
+    census_step: float = option(
+        4.0,
+        help="Grey levels (0-255) of the graded census's second bit: a neighbour darker by "
+        "more than this counts twice, so faint shading and noise weigh half as much as "
+        "texture. 0: the plain census (one bit a neighbour).",
         minimum=0.0,
         maximum=255.0,
     )
@@ -548,6 +557,7 @@ def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Pat
         subpixel=opts.subpixel,
         median_filter=opts.median_filter,
         census_threshold=opts.census_threshold,
+        census_step=opts.census_step,
         vertical=rect.vertical,
     )
     # left pixels whose source lies outside the left image hold no measurement
