@@ -118,6 +118,49 @@ def test_stroke_needs_flagged_ink() -> None:
     assert tissue_mask(tile, i0=0.94)[:, 4:].all()
 
 
+def _ihc_tile(seed: int = 0, size: int = 256, radius: int = 7, step: int = 15) -> np.ndarray:
+    """A Ki67-like IHC field: touching hematoxylin nuclei, one in ten dense DAB.
+
+    The ODs are the medians measured on DeepLIIF's Ki67 tiles (nadeemlab/DeepLIIF,
+    ``Datasets/Sample_Dataset/test_cli/22_2.png`` and the left halves of
+    ``test_cli_input2_noseg/Bladder1.png`` and ``Lung1.png``, I0 = 240): hematoxylin
+    without eosin (0.50, 0.37, 0.27) - OD_G 0.74 OD_R, ink over tissue by the pen rule's
+    hysteresis test -, up to 1.8x denser, and dense DAB + hematoxylin (1.42, 1.63, 1.72),
+    near-neutral (the dark rule's).
+    """
+    gen = np.random.default_rng(seed)
+    hema, dab = np.array([0.50, 0.37, 0.27]), np.array([1.42, 1.63, 1.72])
+    od = np.full((size, size, 3), 0.05)
+    yy, xx = np.mgrid[0:size, 0:size]
+    for cy in range(radius, size, step):
+        for cx in range(radius, size, step):
+            disc = (yy - cy) ** 2 + (xx - cx) ** 2 <= radius * radius
+            od[disc] = dab if gen.random() < 0.1 else hema * gen.uniform(1.0, 1.8)
+    od = od * gen.normal(1.0, 0.03, od.shape)
+    return np.clip(np.round(240 * np.exp(-od)), 0, 255).astype(np.uint8)
+
+
+def test_ihc_keeps_its_nuclei_with_the_dark_rule_off() -> None:
+    """On IHC pass ``tissue_mask(image, dark=False)`` (or ``mask=None``), as documented.
+
+    The default rules are H&E's: IHC hematoxylin reads as ink over tissue (OD_G < OD_R)
+    and dense DAB + hematoxylin is near-neutral (the dark rule's); when the nuclei touch,
+    the hysteresis carries the dark flags through all of them (this field: none kept by
+    default; 26-64 % of three of DeepLIIF's Ki67 tiles dropped,
+    benchmarks/results/stain-fresh-2026-11-30e.md). With the dark rule off every nucleus
+    stays and the stain vectors are every pixel's; nuclei 2 pixels apart keep 90 % by
+    default.
+    """
+    img = _ihc_tile()
+    glass_rule = tissue_mask(img, pen=False, dark=False)
+    no_dark = tissue_mask(img, dark=False)
+    assert no_dark[glass_rule].mean() > 0.99
+    everything = macenko_stains(img, mask=None).stain_matrix
+    assert _worst(macenko_stains(img, mask=no_dark).stain_matrix, everything) < 0.5
+    apart = _ihc_tile(step=16)
+    assert tissue_mask(apart)[tissue_mask(apart, pen=False, dark=False)].mean() > 0.85
+
+
 @pytest.mark.parametrize("ink", ["green", "black"])
 def test_pen_mark_does_not_turn_vahadane(ink: str) -> None:
     img = _read("torchstain_target_crop.png")
