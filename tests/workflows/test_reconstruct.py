@@ -332,3 +332,98 @@ def test_mask_option(
         capsys,
     )
     assert "zero everywhere" in err
+
+
+# ------------------------------------------------------------------ without a camera file
+
+
+@pytest.fixture
+def seen_K(monkeypatch: pytest.MonkeyPatch) -> list:
+    """The stand-in reconstruction, recording the K and distortion it is given."""
+    seen: list = []
+
+    def fake(images: list, K: object, distortion: object = None, **kw: object) -> Reconstruction:
+        seen.append((np.asarray(K, float), distortion, kw))
+        return _fake(images, K, distortion, **kw)
+
+    monkeypatch.setattr(imageform.geometry, "reconstruct_sequence", fake)
+    return seen
+
+
+def test_without_a_camera_file_k_is_guessed_from_exif_or_the_size(
+    seen_K: list, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from PIL import Image
+
+    # PNGs without EXIF: COLMAP's guess, f = 1.2 x max(64, 48) = 76.8 px, center (31.5, 23.5)
+    frames = _blank_frames(tmp_path / "frames", 3)
+    out = tmp_path / "out"
+    assert main(["reconstruct", str(frames), "-o", str(out)]) == 0
+    K0, dist, _ = seen_K[-1]
+    np.testing.assert_allclose(K0, [[76.8, 0, 31.5], [0, 76.8, 23.5], [0, 0, 1]])
+    assert dist is None
+    err = capsys.readouterr().err
+    assert "no camera file: f = 76.8 px from no EXIF focal length: COLMAP's guess" in err
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["camera"] is None
+    assert metrics["intrinsics"]["source"] == "guess"
+    assert metrics["intrinsics"]["focal_px_initial"] == pytest.approx(76.8)
+    # JPEGs whose EXIF gives a 35 mm equivalent of 26 mm: f = 26 sqrt(64^2 + 48^2) / 43.27
+    # = 48.07 px (imageform.io.exif_camera; 43.27 mm the 36 x 24 mm frame's diagonal)
+    jpegs = tmp_path / "jpegs"
+    jpegs.mkdir()
+    ex = Image.Exif()
+    ex.get_ifd(0x8769).update({0xA405: 26, 0x920A: 4.3})
+    for i in range(3):
+        Image.fromarray(np.full((48, 64, 3), 90, np.uint8)).save(jpegs / f"p{i}.jpg", exif=ex)
+    assert main(["reconstruct", str(jpegs), "-o", str(tmp_path / "o2")]) == 0
+    f_exif = 26 * 80 / np.hypot(36, 24)
+    np.testing.assert_allclose(seen_K[-1][0][[0, 1], [0, 1]], [f_exif, f_exif])
+    assert "the EXIF 35 mm equivalent focal length of p0.jpg" in capsys.readouterr().err
+    metrics = json.loads((tmp_path / "o2" / "metrics.json").read_text())
+    assert metrics["intrinsics"]["source"] == "exif"
+    # --focal gives it
+    assert main(["reconstruct", str(jpegs), "--focal", "55", "-o", str(tmp_path / "o3")]) == 0
+    np.testing.assert_allclose(seen_K[-1][0], [[55, 0, 31.5], [0, 55, 23.5], [0, 0, 1]])
+    assert "f = 55.0 px from --focal" in capsys.readouterr().err
+
+
+def test_focal_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A usage error (exit 2) in one line, nothing written."""
+    camera = write_camera(tmp_path / "cam.toml", Camera(K, image_size=(64, 48)))
+    frames = _blank_frames(tmp_path / "frames", 3)
+    out = tmp_path / "out"
+
+    def usage(args: list[str]) -> str:
+        capsys.readouterr()
+        code = main([*args, "-o", str(out)])
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1, err
+        assert not out.exists()
+        return err
+
+    err = usage(["reconstruct", str(frames), "--camera", str(camera), "--focal", "50"])
+    assert "expected --camera FILE or --focal PX, got both" in err
+    for bad in ("0", "-3"):
+        assert "expected --focal > 0 pixels" in usage(["reconstruct", str(frames), "--focal", bad])
+    for bad in ("nan", "inf"):
+        assert "expected --focal as a finite number" in usage(
+            ["reconstruct", str(frames), "--focal", bad]
+        )
+
+
+def test_room_without_a_camera_file_at_the_true_focal(
+    room: tuple[Path, Path, list], tmp_path: Path
+) -> None:
+    frames, _, truth = room
+    out = tmp_path / "out"
+    assert main(["reconstruct", str(frames), "--focal", "240", "-o", str(out),
+                 "--max-features", "1000"]) == 0  # fmt: skip
+    rows = _read(out / "cameras.csv")
+    assert all(r["registered"] == "1" for r in rows)
+    C_est = []
+    for r in rows:
+        R = np.asarray(rvec_to_matrix([float(r[k]) for k in ("rx", "ry", "rz")]))
+        C_est.append(-R.T @ np.array([float(r[k]) for k in ("tx", "ty", "tz")]))
+    C_true = np.array([-R.T @ t for R, t in truth])
+    assert sfm_scenes.align_rms(np.array(C_est), C_true) < 0.01

@@ -52,10 +52,20 @@ METRICS_FORMAT = "imageform-reconstruction"
 class ReconstructOptions(Options):
     """Options of ``imageform reconstruct``."""
 
-    camera: Path = option(
-        help="Camera file of the frames' camera (K and distortion: imageform calibrate).",
+    camera: Path | None = option(
+        None,
+        help="Camera file of the frames' camera (K and distortion: imageform calibrate); "
+        "without it, the focal length from the frames' EXIF (35 mm equivalent) or "
+        "1.2 x max(width, height) (COLMAP's guess), the principal point at the center, no "
+        "distortion.",
         metavar="FILE",
         input=True,
+    )
+    focal: float | None = option(
+        None,
+        help="Without --camera: the focal length in pixels (the principal point at the "
+        "center, no distortion), instead of the EXIF's or the guess.",
+        metavar="PX",
     )
     max_features: int = option(
         4000, help="SIFT keypoints per frame (the strongest).", minimum=8, maximum=1_000_000
@@ -127,6 +137,11 @@ class ReconstructOptions(Options):
             )
         if self.mask is not None and self.auto_mask:
             raise InvalidInputError("expected --mask FILE or --auto-mask, got both")
+        if self.focal is not None:
+            if self.camera is not None:
+                raise InvalidInputError("expected --camera FILE or --focal PX, got both")
+            if not (math.isfinite(self.focal) and self.focal > 0):
+                raise InvalidInputError(f"expected --focal > 0 pixels, got {self.focal:g}")
 
 
 def _hint(opts: ReconstructOptions) -> str:
@@ -149,8 +164,10 @@ def _fmt(x: float) -> str:
 
 def _read_frames(
     source: str, opts: ReconstructOptions, size: tuple[int, int] | None
-) -> tuple[list[Any], list[str], Any]:
+) -> tuple[list[Any], list[str], Any, Path | None]:
     """Read the frames (every ``--every``-th, at most ``--max-frames``), their names, the reader.
+
+    The last: the first frame's file (None for a video's frames).
 
     An interlaced video read as fields (``--deinterlace``) gives the first field of each frame.
     """
@@ -168,6 +185,7 @@ def _read_frames(
         )
     images: list[Any] = []
     names: list[str] = []
+    first: Path | None = None
     with reader:
         for frame in reader:
             index = frame.index
@@ -178,10 +196,12 @@ def _read_frames(
             if index % opts.every:
                 continue
             images.append(frame.image)
+            if not images[1:]:
+                first = frame.path
             names.append(frame.path.name if frame.path is not None else f"frame_{index:06d}")
             if opts.max_frames is not None and len(images) >= opts.max_frames:
                 break
-    return images, names, reader
+    return images, names, reader, first
 
 
 def _read_mask(path: Path, info: Any, field: str | None = None) -> Any:
@@ -227,6 +247,50 @@ def _masks(
     return keep, shares, fov
 
 
+def _guess_camera(
+    opts: ReconstructOptions, width: int, height: int, first: Path | None
+) -> tuple[Any, dict[str, Any]]:
+    """Return K without a camera file, and where its focal length comes from.
+
+    ``--focal``, else the first frame's EXIF focal length (its 35 mm equivalent,
+    :func:`imageform.io.exif_camera`), else COLMAP's guess f = 1.2 max(w, h); the
+    principal point at the center, no distortion.
+    """
+    import numpy as np
+
+    if opts.focal is not None:
+        f, source = float(opts.focal), "--focal"
+    else:
+        f, source = 1.2 * max(width, height), "guess"
+        if first is not None:
+            from imageform.io import exif_camera
+
+            exif = exif_camera(first)
+            if (
+                exif.focal_length_px is not None
+                and (exif.width_px, exif.height_px) == (width, height)
+                and math.isfinite(exif.focal_length_px)
+                and exif.focal_length_px > 0
+            ):
+                f, source = float(exif.focal_length_px), "exif"
+    K = np.array([[f, 0.0, (width - 1) / 2], [0.0, f, (height - 1) / 2], [0.0, 0.0, 1.0]])
+    return K, {"source": source, "focal_px_initial": f}
+
+
+def _camera_note(intr: dict[str, Any], first: Path | None) -> str:
+    """Say where K comes from (no camera file)."""
+    f0 = intr["focal_px_initial"]
+    why = {
+        "--focal": "--focal",
+        "exif": f"the EXIF 35 mm equivalent focal length of {first.name if first else ''}",
+        "guess": "no EXIF focal length: COLMAP's guess 1.2 x max(width, height)",
+    }[intr["source"]]
+    return (
+        f"no camera file: f = {f0:.1f} px from {why}, the principal point at the center, "
+        "no distortion"
+    )
+
+
 def _metrics(rec: Any, names: list[str], seconds: dict[str, float]) -> dict[str, Any]:
     import numpy as np
 
@@ -270,16 +334,26 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     refuse_foreign_folder(
         out, run.outputs.force, _MARKERS, "reconstruct", "a previous reconstruction"
     )
-    cam = read_camera(opts.camera).camera
-    size = None if cam.image_size is None else (int(cam.image_size[0]), int(cam.image_size[1]))
+    cam = None if opts.camera is None else read_camera(opts.camera).camera
+    size = (
+        None
+        if cam is None or cam.image_size is None
+        else (int(cam.image_size[0]), int(cam.image_size[1]))
+    )
     seconds: dict[str, float] = {}
     t0 = time.perf_counter()
     if run.progress is not None:
         run.progress("reading the frames", 0.0)
-    images, names, reader = _read_frames(frames, opts, size)
+    images, names, reader, first = _read_frames(frames, opts, size)
     info = reader.info
     field = reader.field_order if getattr(reader, "deinterlaced", "off") == "fields" else None
-    K = cam.K if field is None else field_camera_matrix(cam.K, field)
+    if cam is None:
+        K_frame, intrinsics = _guess_camera(opts, info.width, info.height, first)
+        distortion = None
+    else:
+        K_frame, distortion = cam.K, cam.distortion
+        intrinsics = {"source": "camera file", "focal_px_initial": float(cam.K[0, 0])}
+    K = K_frame if field is None else field_camera_matrix(K_frame, field)
     if len(images) < 2:
         raise InvalidInputError(
             f"{frames}: {len(images)} frame"
@@ -312,7 +386,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         rec = reconstruct_sequence(
             images,
             K,
-            cam.distortion,
+            distortion,
             window=opts.window,
             max_features=opts.max_features,
             ratio=opts.ratio,
@@ -353,7 +427,8 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         "format": METRICS_FORMAT,
         "version": 1,
         "source": {"frames": frames, "width": info.width, "height": info.height},
-        "camera": str(opts.camera),
+        "camera": None if opts.camera is None else str(opts.camera),
+        "intrinsics": intrinsics,
         **_metrics(rec, names, seconds),
         "masks": mask_shares,
         "deinterlace": deinterlace_summary(reader),
@@ -367,6 +442,8 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     seconds["report"] = time.perf_counter() - t3
     metrics["seconds"] = {k: round(v, 3) for k, v in seconds.items()}
     write_json(folder / "metrics.json", metrics)
+    if cam is None:
+        run.note(f"note: {_camera_note(intrinsics, first)}")
     deint = deinterlace_note(reader, info.fps, "reconstructing from")
     if deint:
         run.note(f"note: {deint}")
