@@ -427,3 +427,43 @@ def test_room_without_a_camera_file_at_the_true_focal(
         C_est.append(-R.T @ np.array([float(r[k]) for k in ("tx", "ty", "tz")]))
     C_true = np.array([-R.T @ t for R, t in truth])
     assert sfm_scenes.align_rms(np.array(C_est), C_true) < 0.01
+
+
+def test_room_without_a_camera_file_refines_the_guess(
+    room: tuple[Path, Path, list], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """PNGs without EXIF: f = 1.2 x 320 = 384 px guessed (the truth 240 px: 60 % off), then
+    refined by bundle adjustment to within 2 %; the trajectory within 1 % of the path."""
+    frames, _, truth = room
+    out = tmp_path / "out"
+    assert main(["reconstruct", str(frames), "-o", str(out), "--max-features", "1000"]) == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    intr = metrics["intrinsics"]
+    assert intr["source"] == "guess" and intr["focal_px_initial"] == 384.0 and intr["refined"]
+    assert intr["focal_px"] == pytest.approx(240.0, rel=0.02)
+    assert "refined by bundle adjustment to f = 24" in capsys.readouterr().err
+    rows = _read(out / "cameras.csv")
+    assert all(r["registered"] == "1" for r in rows)
+    C_est = []
+    for r in rows:
+        R = np.asarray(rvec_to_matrix([float(r[k]) for k in ("rx", "ry", "rz")]))
+        C_est.append(-R.T @ np.array([float(r[k]) for k in ("tx", "ty", "tz")]))
+    C_true = np.array([-R.T @ t for R, t in truth])
+    assert sfm_scenes.align_rms(np.array(C_est), C_true) < 0.01
+
+
+def test_refine_focal_is_asked_with_a_camera_file_or_focal(seen_K: list, tmp_path: Path) -> None:
+    camera = write_camera(tmp_path / "cam.toml", Camera(K, image_size=(64, 48)))
+    frames = _blank_frames(tmp_path / "frames", 3)
+    runs = [
+        (["--camera", str(camera)], False),
+        (["--camera", str(camera), "--refine-focal"], True),
+        (["--focal", "50"], False),
+        (["--focal", "50", "--refine-focal"], True),
+        ([], True),
+    ]
+    for i, (args, refine) in enumerate(runs):
+        out = tmp_path / f"o{i}"
+        assert main(["reconstruct", str(frames), *args, "-o", str(out)]) == 0
+        assert seen_K[-1][2]["refine_focal"] is refine, args
+        assert json.loads((out / "metrics.json").read_text())["intrinsics"]["refined"] is refine

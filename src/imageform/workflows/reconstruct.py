@@ -67,6 +67,12 @@ class ReconstructOptions(Options):
         "center, no distortion), instead of the EXIF's or the guess.",
         metavar="PX",
     )
+    refine_focal: bool = option(
+        False,
+        help="Refine the focal length given by --camera or --focal in the bundle "
+        "adjustments (one for every frame, the principal point held); a focal length from "
+        "the EXIF or the guess is always refined.",
+    )
     max_features: int = option(
         4000, help="SIFT keypoints per frame (the strongest).", minimum=8, maximum=1_000_000
     )
@@ -280,6 +286,14 @@ def _guess_camera(
 def _camera_note(intr: dict[str, Any], first: Path | None) -> str:
     """Say where K comes from (no camera file)."""
     f0 = intr["focal_px_initial"]
+    refined = (
+        f"; refined by bundle adjustment to f = {intr['focal_px']:.1f} px "
+        f"({100 * (intr['focal_px'] / f0 - 1):+.1f} %)"
+        if intr["refined"]
+        else ""
+    )
+    if intr["source"] == "camera file":
+        return f"the camera file's f = {f0:.1f} px{refined}"
     why = {
         "--focal": "--focal",
         "exif": f"the EXIF 35 mm equivalent focal length of {first.name if first else ''}",
@@ -287,7 +301,7 @@ def _camera_note(intr: dict[str, Any], first: Path | None) -> str:
     }[intr["source"]]
     return (
         f"no camera file: f = {f0:.1f} px from {why}, the principal point at the center, "
-        "no distortion"
+        f"no distortion{refined}"
     )
 
 
@@ -354,6 +368,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         K_frame, distortion = cam.K, cam.distortion
         intrinsics = {"source": "camera file", "focal_px_initial": float(cam.K[0, 0])}
     K = K_frame if field is None else field_camera_matrix(K_frame, field)
+    refine = opts.refine_focal or intrinsics["source"] in ("exif", "guess")
     if len(images) < 2:
         raise InvalidInputError(
             f"{frames}: {len(images)} frame"
@@ -392,6 +407,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
             ratio=opts.ratio,
             masks=mask,
             contrast_threshold=opts.contrast_threshold,
+            refine_focal=refine,
         )
     except DegenerateConfigurationError as exc:
         raise DegenerateConfigurationError(f"{frames}: {exc}{_hint(opts)}") from exc
@@ -400,6 +416,9 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
             raise
         raise InvalidInputError(f"{frames}: {exc}{_hint(opts)}") from exc
     seconds["reconstruct"] = time.perf_counter() - t1
+    # fx: the frame's and its field's (a field halves fy)
+    intrinsics["refined"] = refine
+    intrinsics["focal_px"] = float(np.asarray(K if rec.K is None else rec.K)[0, 0])
     del images
     folder = run.folder(out)
     t2 = time.perf_counter()
@@ -442,7 +461,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     seconds["report"] = time.perf_counter() - t3
     metrics["seconds"] = {k: round(v, 3) for k, v in seconds.items()}
     write_json(folder / "metrics.json", metrics)
-    if cam is None:
+    if cam is None or refine:
         run.note(f"note: {_camera_note(intrinsics, first)}")
     deint = deinterlace_note(reader, info.fps, "reconstructing from")
     if deint:
