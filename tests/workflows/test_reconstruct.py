@@ -101,6 +101,11 @@ def test_points_metrics_and_report(run: tuple[Path, dict, list]) -> None:
     assert metrics["observations"] == int(ply["track_length"].sum())
     assert set(metrics["seconds"]) == {"read", "reconstruct", "write", "report"}
     assert metrics["options"]["max_features"] == 1000 and metrics["unregistered"] == []
+    # the camera file's K held, and checked: a bundle adjustment refining f finds it again
+    intr = metrics["intrinsics"]
+    assert intr["source"] == "camera file" and not intr["refined"]
+    assert intr["focal_px"] == 240.0 and intr["focal_px_fit"] == pytest.approx(240.0, rel=0.02)
+    assert not any("fits the frames poorly" in n for n in metrics["notes"])
     html = (out / "report.html").read_text()
     for part in ("Cameras and points", "Reprojection errors", "What failed", "view7.png"):
         assert part in html
@@ -467,3 +472,22 @@ def test_refine_focal_is_asked_with_a_camera_file_or_focal(seen_K: list, tmp_pat
         assert main(["reconstruct", str(frames), *args, "-o", str(out)]) == 0
         assert seen_K[-1][2]["refine_focal"] is refine, args
         assert json.loads((out / "metrics.json").read_text())["intrinsics"]["refined"] is refine
+
+
+def test_a_camera_file_whose_focal_length_fits_poorly_is_flagged(
+    room: tuple[Path, Path, list], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The room's frames (f = 240 px) with a camera file at 360 px: one note line."""
+    frames, _, _ = room
+    wrong = K.copy()
+    wrong[0, 0] = wrong[1, 1] = 360.0
+    camera = write_camera(tmp_path / "wrong.toml", Camera(wrong, image_size=SIZE))
+    out = tmp_path / "out"
+    args = ["reconstruct", str(frames), "--camera", str(camera), "-o", str(out)]
+    assert main([*args, "--max-features", "1000"]) == 0
+    fit = json.loads((out / "metrics.json").read_text())["intrinsics"]["focal_px_fit"]
+    assert fit < 0.8 * 360.0
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if "fits the frames poorly" in ln]
+    assert len(lines) == 1, lines
+    assert f"finds f = {fit:.1f} px, the camera's is 360.0 px" in lines[0]
+    assert "imageform reconstruct --refine-focal" in lines[0]

@@ -322,6 +322,10 @@ class Reconstruction:
     K : ndarray (3, 3) or None
         The camera matrix of the final bundle adjustment: the one given, or with its focal
         length refined (``refine_focal``).
+    focal_fit_px : float or None
+        With ``K`` held: the focal length one more bundle adjustment finds when it refines
+        it from the final poses and points (a check of the given ``K``: a note when it
+        differs by more than 20 %); None when ``refine_focal`` or fewer than 3 frames.
     """
 
     R: F64
@@ -334,6 +338,12 @@ class Reconstruction:
     notes: list[str] = field(default_factory=list)
     residuals_px: F64 = field(default_factory=lambda: np.zeros(0))
     K: F64 | None = None
+    focal_fit_px: float | None = None
+
+
+#: A given focal length is flagged when a bundle adjustment that refines it moves it by more
+#: than this share (:func:`reconstruct_sequence`'s note).
+_FOCAL_CHECK = 0.2
 
 
 def _angle_deg(C1: F64, C2: F64, X: F64) -> F64:
@@ -1140,7 +1150,12 @@ def reconstruct_sequence(
         Refine the focal length in the bundle adjustments of every registered frame once
         three are registered, and in the final one (one focal length for every frame, the
         principal point and the aspect ratio kept: COLMAP's default for a focal length it
-        guessed); else ``K`` is held. The result's ``K`` is the one found.
+        guessed); when it moves by more than 5 %, the reconstruction starts again from
+        the one found (twice at most: the first frames were registered with a wrong one).
+        Else ``K`` is held, and checked: one more bundle adjustment that
+        refines the focal length from the final poses and points, a note when it moves
+        by more than 20 % (the result's ``focal_fit_px``). The result's ``K`` is the one
+        found.
 
     Returns
     -------
@@ -1169,6 +1184,51 @@ def reconstruct_sequence(
         "refine_focal": bool(refine_focal),
         "cache": cache,
     }
+    best = _one_model(images, K, distortion, kw)
+    if not refine_focal:
+        return best
+    # the focal length moved far from where it started: the first frames were registered
+    # with a wrong one (and some not at all); again from the one found, twice at most
+    K_start = np.array(K, np.float64)
+    said: list[str] = []
+    for _ in range(2):
+        assert best.K is not None
+        start, found = float(K_start[0, 0]), float(best.K[0, 0])
+        if abs(found / start - 1) < _FOCAL_RESTART:
+            break
+        K1 = K_start.copy()
+        K1[:2, :2] *= found / start
+        cache.pop("pairs", None)  # verified with the other K; the keypoints stay
+        try:
+            again = _one_model(images, K1, distortion, kw)
+        except DegenerateConfigurationError:
+            break
+        note = (
+            f"the focal length moved from {start:.1f} px to {found:.1f} px: reconstructed "
+            f"again from {found:.1f} px, found "
+            f"{float(again.K[0, 0]) if again.K is not None else found:.1f} px"
+        )
+        if int(again.registered.sum()) < int(best.registered.sum()):
+            best = replace(best, notes=[*best.notes, note + ", fewer frames: not kept"])
+            break
+        said.append(note)
+        best = replace(again, notes=[*again.notes, *said])
+        K_start = K1
+    return best
+
+
+#: With ``refine_focal``: a focal length that moves by more than this share starts the
+#: reconstruction again from the one found (:func:`reconstruct_sequence`).
+_FOCAL_RESTART = 0.05
+
+
+def _one_model(
+    images: Sequence[ArrayLike],
+    K: ArrayLike,
+    distortion: DistortionModel | None,
+    kw: dict[str, Any],
+) -> Reconstruction:
+    """Reconstruct the largest model of up to three starts (:func:`reconstruct_sequence`)."""
     best = _reconstruct(images, K, distortion, **kw, starts=None)
     n = len(images)
     # one model holds fewer than half the frames: the sequence may have a larger part its
@@ -1474,6 +1534,30 @@ def _reconstruct(
         Rs[registered], ts[registered] = Rn[registered], tn[registered]
         P[pts] = Xn
         k[:] = Kn  # the keypoints' undistortion stays the given K's (a small change)
+
+    def check_focal() -> float | None:
+        """Return the focal length a final adjustment that refines it finds (K itself held)."""
+        ids = np.flatnonzero(o_ok & registered[o_frame] & has_point()[o_track])
+        if ids.size == 0 or int(registered.sum()) < 3:
+            return None
+        fixed = ~registered
+        fixed[i0] = True
+        pts, pslot = np.unique(o_track[ids], return_inverse=True)
+        *_, Kc = _schur_lm(
+            k,
+            np.where(registered[:, None, None], Rs, np.eye(3)),
+            np.where(registered[:, None], ts, 0.0),
+            P[pts],
+            o_frame[ids],
+            pslot,
+            o_uv[ids],
+            fixed,
+            0.0,
+            30,
+            A=None if distortion is None else o_A[ids],
+            focal=True,
+        )
+        return float(Kc[0, 0])
 
     def filter_obs(limit: float, min_angle: float = 0.0) -> None:
         """Drop observations beyond ``limit`` pixels; points left with one view go."""
@@ -1970,6 +2054,7 @@ def _reconstruct(
     filter_obs(2.0)
     adjust(0.0, 50, refine_focal)
     filter_obs(2.0)
+    focal_fit = None if refine_focal else check_focal()
     # the output in the first registered frame's camera frame (frame 0 when registered):
     # X' = R_f X + t_f, R_i' = R_i R_f^T, t_i' = t_i - R_i' t_f (a rigid motion: the
     # reprojections and the initial pair's baseline stay)
@@ -2014,4 +2099,13 @@ def _reconstruct(
         y = np.clip(xy[:, 1], 0, im.shape[0] - 1)
         v = _as_uint8(im[y, x], im.dtype, im)
         colors[sel] = v[:, :3] if v.ndim == 2 else v[:, None]
-    return Reconstruction(Rs, ts, registered, Pout, colors, length, rms, notes, residuals, k)
+    if focal_fit is not None and abs(focal_fit / k[0, 0] - 1) > _FOCAL_CHECK:
+        notes.append(
+            f"the focal length fits the frames poorly: a bundle adjustment that refines it "
+            f"finds f = {focal_fit:.1f} px, the camera's is {k[0, 0]:.1f} px "
+            f"({100 * (focal_fit / k[0, 0] - 1):+.0f} %); check the camera (its image size, "
+            "a zoom) or refine it (refine_focal; imageform reconstruct --refine-focal)"
+        )
+    return Reconstruction(
+        Rs, ts, registered, Pout, colors, length, rms, notes, residuals, k, focal_fit
+    )

@@ -419,6 +419,8 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     # fx: the frame's and its field's (a field halves fy)
     intrinsics["refined"] = refine
     intrinsics["focal_px"] = float(np.asarray(K if rec.K is None else rec.K)[0, 0])
+    # held: the focal length a bundle adjustment refining it finds (the given K's check)
+    intrinsics["focal_px_fit"] = rec.focal_fit_px
     del images
     folder = run.folder(out)
     t2 = time.perf_counter()
