@@ -489,14 +489,14 @@ def run_imageform(
     out |= {"cpu": time.process_time() - c0, "f0": float(cam.K[0, 0])}
     out["f"] = float(cam.K[0, 0] if rec.K is None else rec.K[0, 0])
     fallback = sum("registered by" in note for note in rec.notes)
-    out["note"] = f"{fallback} by the fallbacks" if fallback else ""
+    said = [f"{fallback} by the fallbacks"] if fallback else []
     if rec.focal_fit_px is not None:  # K held: the check's focal length
         flag = any("fits the frames poorly" in note for note in rec.notes)
-        out["note"] += f"; check: f {rec.focal_fit_px:.1f} px" + (", flagged" if flag else "")
+        said.append(f"check: f {rec.focal_fit_px:.1f} px" + (", flagged" if flag else ""))
     restarts = sum("reconstructed again from" in note for note in rec.notes)
     if restarts:
-        out["note"] += f"; {restarts} restarts from the f found"
-    out["note"] = out["note"].lstrip("; ")
+        said.append(f"{restarts} restarts from the f found")
+    out["note"] = "; ".join(said)
     return out
 
 
@@ -564,6 +564,7 @@ def run_pycolmap(
 
     n = len(frames)
     h, w = frames[0].shape[:2]
+    params: tuple[float, ...]
     if cam is None:  # an equidistant guess, one focal length: 0.45 w (the C3VD camera's)
         model, params = "RADIAL_FISHEYE", (0.45 * w, w / 2, h / 2, 0, 0)
     elif type(cam.distortion).__name__ == "KannalaBrandt":
@@ -778,8 +779,9 @@ def autok_table(name: str, data: Path) -> tuple[str, list[list[Any]]]:
         sc["f0"], sc["f"] = 0.45 * w, sc["camera"][0]
         sc["note"] = f"RADIAL_FISHEYE, k {sc['camera'][3]:.3f} {sc['camera'][4]:.3f}"
         runs.append(("pycolmap, self-calibrated fisheye", sc))
+    f_ref: float | None = float(given.K[0, 0])
     if truth is not None:
-        ref, ref_label, f_ref = truth, "truth", float(given.K[0, 0])
+        ref, ref_label = truth, "truth"
     else:
         ref_run = runs[-1][1]
         ref, ref_label, f_ref = (ref_run["R"], ref_run["t"]), runs[-1][0], ref_run.get("f")
