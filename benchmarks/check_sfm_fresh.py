@@ -50,8 +50,8 @@ diverged on the tuning clips: fx and fy 77 and 114 px, 2 frames registered), wri
 ``kannala_brandt`` camera file (k1, k2) that both programs then use fixed (when the
 self-calibration makes no model, its starting guess: f 0.45 w, equidistant), as
 ``check_endo_real.py`` does: the comparison is between two programs with the same camera,
-and the row of the self-calibrating run is the reference. imageform has no self-calibration
-and ``imageform reconstruct`` needs ``--camera`` (``Error: Missing option '--camera'``).
+and the row of the self-calibrating run is the reference. (Then imageform had no self-calibration
+and ``imageform reconstruct`` needed ``--camera``: ``--autok`` below.)
 
 Runs: imageform's library (:func:`imageform.geometry.reconstruct_sequence`) and its command
 (``python -m imageform reconstruct FRAMES --camera camera.toml -o OUT``), with the
@@ -68,6 +68,16 @@ pycolmap row, its focal length and radial term refined from the given camera
 (``SIMPLE_RADIAL``): a check of the given camera (its note prints the focal length found).
 pycolmap's runs are kept in the data folder (``pycolmap.json``, ``selfcal.json``): a second
 run, e.g. with the code before a change on ``PYTHONPATH``, compares against the same ones.
+
+``--autok`` (``sfm-autok-*.md``): the same sequences without a camera file. imageform's
+library with the given K held (its check of K in the note) and with its focal length
+refined; without a camera (f = 1.2 max(w, h), the principal point at the center, no
+distortion, the focal length refined), by the library and by ``imageform reconstruct``
+without ``--camera`` (the frames are PNGs: no EXIF); pycolmap from COLMAP's default for an
+unknown camera (``SIMPLE_RADIAL`` from the same f, its focal length and k1 refined;
+``autok-pycolmap.json``); for an endoscope its fisheye self-calibration above. The focal
+length found against the truth (Middlebury's calibration) or, where there is none, against
+pycolmap's; the poses as above; seconds wall (CPU for the library).
 Run::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_sfm_fresh.py \\
@@ -76,6 +86,8 @@ Run::
         --data /tmp/sfmfresh/data --split tuning [--only temple dino]
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_sfm_fresh.py \\
         --data /tmp/sfmfresh/data --split held-out
+    OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_sfm_fresh.py \\
+        --data /tmp/sfmfresh/data --autok
 """
 
 from __future__ import annotations
