@@ -1,11 +1,11 @@
 """``imageform reconstruct``: camera poses and a coloured point cloud from a video.
 
 The course's structure-from-motion application: with the intrinsics known (a camera file),
-the frames of a video (a file, a folder or a glob of images) give the camera's motion and the
-scene's shape up to a similarity. The maths lives in
-:func:`imageform.geometry.reconstruct_sequence`; this module reads the frames, writes
-``cameras.csv``, ``points.ply``, ``report.html`` and ``metrics.json`` into the output folder
-(all or nothing), and reports the time and the errors.
+or a focal length from the EXIF or guessed and refined, the frames of a video (a file, a
+folder or a glob of images) give the camera's motion and the scene's shape up to a similarity.
+The maths lives in :func:`imageform.geometry.reconstruct_sequence`; this module reads the
+frames, writes ``cameras.csv``, ``points.ply``, ``report.html`` and ``metrics.json`` into the
+output folder (all or nothing), and reports the time and the errors.
 """
 
 from __future__ import annotations
@@ -520,7 +520,8 @@ WORKFLOWS = (
         description="SIFT keypoints matched between neighbouring frames (--window), each pair "
         "verified by its essential matrix (RANSAC), the pair with the most parallax first, "
         "the other frames registered by PnP, the points triangulated, then bundle adjustment "
-        "of every pose and point (needs imageform[reconstruct]); --mask keeps the keypoints to "
+        "of every pose and point (needs imageform[reconstruct]); without --camera the focal "
+        "length from the EXIF or 1.2 x max(width, height), refined; --mask keeps the keypoints to "
         "a region of every frame, --auto-mask finds an endoscope's aperture, --highlights keeps "
         "them off specular highlights. The world is the camera "
         "frame of the first registered frame (frame 0 when registered), the initial pair's "
