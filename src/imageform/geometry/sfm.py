@@ -1268,9 +1268,9 @@ def _reconstruct(
     rng: int,
     masks: ArrayLike | Sequence[ArrayLike | None] | None,
     contrast_threshold: float,
-    refine_focal: bool,
     cache: dict[str, Any],
     starts: frozenset[int] | None,
+    refine_focal: bool = False,
 ) -> Reconstruction:
     """Reconstruct one model (:func:`reconstruct_sequence`), started from a pair in ``starts``.
 
