@@ -491,3 +491,35 @@ def test_a_camera_file_whose_focal_length_fits_poorly_is_flagged(
     assert len(lines) == 1, lines
     assert f"finds f = {fit:.1f} px, the camera's is 360.0 px" in lines[0]
     assert "imageform reconstruct --refine-focal" in lines[0]
+
+
+def test_room_photographs_with_exif_focal_length(
+    room: tuple[Path, Path, list], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The room's frames as JPEGs whose EXIF says 26 mm (35 mm equivalent): f = 26 x 400 /
+    43.27 = 240.4 px (the truth 240 px), refined; the trajectory within 1 % of the path."""
+    from PIL import Image
+
+    frames, _, truth = room
+    jpegs = tmp_path / "jpegs"
+    jpegs.mkdir()
+    ex = Image.Exif()
+    ex.get_ifd(0x8769).update({0xA405: 26})
+    for png in sorted(frames.glob("*.png")):
+        with Image.open(png) as im:
+            im.convert("RGB").save(jpegs / (png.stem + ".jpg"), quality=95, exif=ex)
+    out = tmp_path / "out"
+    assert main(["reconstruct", str(jpegs), "-o", str(out), "--max-features", "1000"]) == 0
+    intr = json.loads((out / "metrics.json").read_text())["intrinsics"]
+    assert intr["source"] == "exif" and intr["refined"]
+    assert intr["focal_px_initial"] == pytest.approx(26 * 400 / np.hypot(36, 24))
+    assert intr["focal_px"] == pytest.approx(240.0, rel=0.02)
+    assert "the EXIF 35 mm equivalent focal length of view0.jpg" in capsys.readouterr().err
+    rows = _read(out / "cameras.csv")
+    assert all(r["registered"] == "1" for r in rows)
+    C_est = []
+    for r in rows:
+        R = np.asarray(rvec_to_matrix([float(r[k]) for k in ("rx", "ry", "rz")]))
+        C_est.append(-R.T @ np.array([float(r[k]) for k in ("tx", "ty", "tz")]))
+    C_true = np.array([-R.T @ t for R, t in truth])
+    assert sfm_scenes.align_rms(np.array(C_est), C_true) < 0.01
