@@ -50,8 +50,8 @@ diverged on the tuning clips: fx and fy 77 and 114 px, 2 frames registered), wri
 ``kannala_brandt`` camera file (k1, k2) that both programs then use fixed (when the
 self-calibration makes no model, its starting guess: f 0.45 w, equidistant), as
 ``check_endo_real.py`` does: the comparison is between two programs with the same camera,
-and the row of the self-calibrating run is the reference. imageform has no self-calibration
-and ``imageform reconstruct`` needs ``--camera`` (``Error: Missing option '--camera'``).
+and the row of the self-calibrating run is the reference. (Then imageform had no self-calibration
+and ``imageform reconstruct`` needed ``--camera``: ``--autok`` below.)
 
 Runs: imageform's library (:func:`imageform.geometry.reconstruct_sequence`) and its command
 (``python -m imageform reconstruct FRAMES --camera camera.toml -o OUT``), with the
@@ -68,6 +68,16 @@ pycolmap row, its focal length and radial term refined from the given camera
 (``SIMPLE_RADIAL``): a check of the given camera (its note prints the focal length found).
 pycolmap's runs are kept in the data folder (``pycolmap.json``, ``selfcal.json``): a second
 run, e.g. with the code before a change on ``PYTHONPATH``, compares against the same ones.
+
+``--autok`` (``sfm-autok-*.md``): the same sequences without a camera file. imageform's
+library with the given K held (its check of K in the note) and with its focal length
+refined; without a camera (f = 1.2 max(w, h), the principal point at the center, no
+distortion, the focal length refined), by the library and by ``imageform reconstruct``
+without ``--camera`` (the frames are PNGs: no EXIF); pycolmap from COLMAP's default for an
+unknown camera (``SIMPLE_RADIAL`` from the same f, its focal length and k1 refined;
+``autok-pycolmap.json``); for an endoscope its fisheye self-calibration above. The focal
+length found against the truth (Middlebury's calibration) or, where there is none, against
+pycolmap's; the poses as above; seconds wall (CPU for the library).
 Run::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_sfm_fresh.py \\
@@ -76,6 +86,8 @@ Run::
         --data /tmp/sfmfresh/data --split tuning [--only temple dino]
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_sfm_fresh.py \\
         --data /tmp/sfmfresh/data --split held-out
+    OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_sfm_fresh.py \\
+        --data /tmp/sfmfresh/data --autok
 """
 
 from __future__ import annotations
@@ -463,16 +475,19 @@ def _nan_poses(n: int) -> tuple[np.ndarray, np.ndarray]:
     return np.full((n, 3, 3), np.nan), np.full((n, 3), np.nan)
 
 
-def run_imageform(frames: list[np.ndarray], cam: Any, endoscope: bool) -> dict[str, Any]:
+def run_imageform(
+    frames: list[np.ndarray], cam: Any, endoscope: bool, refine_focal: bool = False
+) -> dict[str, Any]:
     from imageform.geometry import field_of_view_mask, reconstruct_sequence
 
     n = len(frames)
     t0 = time.perf_counter()
+    c0 = time.process_time()
     kw: dict[str, Any] = {}
     if endoscope:
         kw = {"masks": field_of_view_mask(frames), "contrast_threshold": 0.01}
     try:
-        rec = reconstruct_sequence(frames, cam.K, cam.distortion, **kw)
+        rec = reconstruct_sequence(frames, cam.K, cam.distortion, refine_focal=refine_focal, **kw)
     except Exception as exc:  # a refusal is a result too
         R, t = _nan_poses(n)
         msg = f"{type(exc).__name__}: {str(exc)[:160]}"
@@ -483,16 +498,31 @@ def run_imageform(frames: list[np.ndarray], cam: Any, endoscope: bool) -> dict[s
     out = {"reg": int(rec.registered.sum()), "time": time.perf_counter() - t0, "R": R, "t": t}
     out |= {"points": int(rec.points.shape[0]), "track": float(np.mean(rec.track_length))}
     out |= {"reproj": float(np.median(r)) if r.size else float("nan")}
+    out |= {"cpu": time.process_time() - c0, "f0": float(cam.K[0, 0])}
+    out["f"] = float(cam.K[0, 0] if rec.K is None else rec.K[0, 0])
     fallback = sum("registered by" in note for note in rec.notes)
-    out["note"] = f"{fallback} by the fallbacks" if fallback else ""
+    said = [f"{fallback} by the fallbacks"] if fallback else []
+    if rec.focal_fit_px is not None:  # K held: the check's focal length
+        flag = any("fits the frames poorly" in note for note in rec.notes)
+        said.append(f"check: f {rec.focal_fit_px:.1f} px" + (", flagged" if flag else ""))
+    restarts = sum("reconstructed again from" in note for note in rec.notes)
+    if restarts:
+        said.append(f"{restarts} restarts from the f found")
+    out["note"] = "; ".join(said)
     return out
 
 
-def run_cli(folder: Path, endoscope: bool) -> dict[str, Any]:
-    """``python -m imageform reconstruct`` on the frames folder; its metrics.json."""
+def run_cli(folder: Path, endoscope: bool, camera: bool = True) -> dict[str, Any]:
+    """``python -m imageform reconstruct`` on the frames folder; its metrics.json.
+
+    ``camera`` False: without ``--camera`` (K from the frames, its focal length refined);
+    then its poses (cameras.csv) and focal lengths too.
+    """
     with tempfile.TemporaryDirectory() as tmp:
         cmd = [sys.executable, "-m", "imageform", "reconstruct", str(folder / "frames")]
-        cmd += ["--camera", str(folder / "camera.toml"), "-o", str(Path(tmp) / "out")]
+        if camera:
+            cmd += ["--camera", str(folder / "camera.toml")]
+        cmd += ["-o", str(Path(tmp) / "out")]
         if endoscope:
             cmd += ["--auto-mask", "--contrast-threshold", "0.01"]
         t0 = time.perf_counter()
@@ -502,20 +532,42 @@ def run_cli(folder: Path, endoscope: bool) -> dict[str, Any]:
             lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
             return {"reg": 0, "time": dt, "note": (lines[-1] if lines else "?")[:200]}
         m = json.loads((Path(tmp) / "out" / "metrics.json").read_text())
-    return {
-        "reg": m["registered"],
-        "points": m["points"],
-        "track": m["track_length_mean"],
-        "reproj": m["reprojection_px_median"],
-        "time": dt,
-        "note": "",
-    }
+        out = {
+            "reg": m["registered"],
+            "points": m["points"],
+            "track": m["track_length_mean"],
+            "reproj": m["reprojection_px_median"],
+            "time": dt,
+            "note": "",
+        }
+        if not camera:
+            import csv
+
+            from imageform.geometry import rvec_to_matrix
+
+            with (Path(tmp) / "out" / "cameras.csv").open() as fh:
+                rows = list(csv.DictReader(fh))
+            R, t = _nan_poses(len(rows))
+            for i, r in enumerate(rows):
+                if r["registered"] == "1":
+                    R[i] = np.asarray(rvec_to_matrix([float(r[k]) for k in ("rx", "ry", "rz")]))
+                    t[i] = [float(r[k]) for k in ("tx", "ty", "tz")]
+            intr = m["intrinsics"]
+            out |= {"R": R, "t": t, "f0": intr["focal_px_initial"], "f": intr["focal_px"]}
+    return out
 
 
 def run_pycolmap(
-    frames: list[np.ndarray], cam: Any | None, endoscope: bool, self_calibrate: bool = False
+    frames: list[np.ndarray],
+    cam: Any | None,
+    endoscope: bool,
+    self_calibrate: bool = False,
+    camera_model: tuple[str, tuple[float, ...]] | None = None,
 ) -> dict[str, Any]:
-    """pycolmap's sequential matching and incremental mapping; the camera fixed or refined."""
+    """pycolmap's sequential matching and incremental mapping; the camera fixed or refined.
+
+    ``camera_model``: COLMAP's model and parameters, instead of the ones ``cam`` gives.
+    """
     import cv2
     import pycolmap
 
@@ -524,6 +576,7 @@ def run_pycolmap(
 
     n = len(frames)
     h, w = frames[0].shape[:2]
+    params: tuple[float, ...]
     if cam is None:  # an equidistant guess, one focal length: 0.45 w (the C3VD camera's)
         model, params = "RADIAL_FISHEYE", (0.45 * w, w / 2, h / 2, 0, 0)
     elif type(cam.distortion).__name__ == "KannalaBrandt":
@@ -538,6 +591,8 @@ def run_pycolmap(
         params = (*np.diag(cam.K)[:2], *cam.K[:2, 2], *c[:5], 0, 0, 0)
     else:
         model, params = "PINHOLE", (*np.diag(cam.K)[:2], *cam.K[:2, 2])
+    if camera_model is not None:
+        model, params = camera_model
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         (root / "images").mkdir()
@@ -682,6 +737,111 @@ def sequence_table(name: str, data: Path) -> tuple[str, list[list[Any]]]:
     return info, rows
 
 
+def autok_table(name: str, data: Path) -> tuple[str, list[list[Any]]]:
+    """The focal length without a camera file (``--autok``): imageform against pycolmap.
+
+    Rows: imageform's library with the given K held (the reference run of the table
+    above) and with its focal length refined (what ``--refine-focal`` does); imageform's
+    command without ``--camera`` (PNG frames, no EXIF: f = 1.2 max(w, h), refined);
+    pycolmap from COLMAP's default for a camera it does not know (``SIMPLE_RADIAL`` from
+    f = 1.2 max(w, h), its focal length and k1 refined), kept in ``autok-pycolmap.json``;
+    for an endoscope, the self-calibration the table above uses (``selfcal.json``).
+    """
+    from imageform.geometry import Camera
+    from imageform.io import read_camera
+
+    s = SEQUENCES[name]
+    folder = data / name
+    frames = _frames(folder)
+    n = len(frames)
+    h, w = frames[0].shape[:2]
+    endo = s["endoscope"]
+    given = read_camera(folder / "camera.toml").camera
+    truth = None
+    if (folder / "truth.npz").exists():
+        with np.load(folder / "truth.npz") as z:
+            truth = (z["R"], z["t"])
+    guess = 1.2 * max(w, h)
+    print(f"  {name}: {n} frames {w} x {h}", file=sys.stderr)
+    runs: list[tuple[str, dict[str, Any]]] = []
+    if not endo:  # the endoscopes' camera file is pycolmap's fisheye self-calibration
+        runs.append(("imageform library, given K held", run_imageform(frames, given, endo)))
+        runs.append(
+            ("imageform library, given f refined", run_imageform(frames, given, endo, True))
+        )
+    pinhole = Camera(np.array([[guess, 0, (w - 1) / 2], [0, guess, (h - 1) / 2], [0, 0, 1]]))
+    runs.append(("imageform library, no camera", run_imageform(frames, pinhole, endo, True)))
+    runs.append(("imageform CLI, no --camera", run_cli(folder, endo, camera=False)))
+    cached = folder / "autok-pycolmap.json"
+    if cached.exists():
+        pc = json.loads(cached.read_text())
+        pc["R"], pc["t"] = np.array(pc["R"], float), np.array(pc["t"], float)
+    else:
+        pc = run_pycolmap(frames, None, endo, True, ("SIMPLE_RADIAL", (guess, w / 2, h / 2, 0.0)))
+        keep = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in pc.items()}
+        cached.write_text(json.dumps(keep))
+    pc["f0"] = guess
+    if "camera" in pc:
+        pc["f"] = pc["camera"][0]
+        pc["note"] = (pc.get("note", "") + f" k1 {pc['camera'][3]:.3f}").strip()
+    runs.append(("pycolmap, no camera (SIMPLE_RADIAL)", pc))
+    if endo:
+        sc = json.loads((folder / "selfcal.json").read_text())
+        sc["R"], sc["t"] = np.array(sc["R"], float), np.array(sc["t"], float)
+        sc["f0"], sc["f"] = 0.45 * w, sc["camera"][0]
+        sc["note"] = f"RADIAL_FISHEYE, k {sc['camera'][3]:.3f} {sc['camera'][4]:.3f}"
+        runs.append(("pycolmap, self-calibrated fisheye", sc))
+    f_ref: float | None = float(given.K[0, 0])
+    if truth is not None:
+        ref, ref_label = truth, "truth"
+    else:
+        ref_run = runs[-1][1]
+        ref, ref_label, f_ref = (ref_run["R"], ref_run["t"]), runs[-1][0], ref_run.get("f")
+    rows = []
+    for label, r in runs:
+        ok = r["reg"] > 0 and "points" in r
+        if ok and "R" in r and not (truth is None and r is runs[-1][1]):
+            rot, tra, rms = agreement(r["R"], r["t"], *ref)
+            vs = f"{rot:.2f} / {tra:.2f} / {rms:.2f}"
+        else:
+            vs = "reference" if ok and truth is None and r is runs[-1][1] else "-"
+        f = r.get("f")
+        rows.append(
+            [
+                name,
+                label,
+                f"{r['f0']:.1f}" if r.get("f0") else "-",
+                f"{f:.1f}" if f is not None else "-",
+                f"{100 * (f / f_ref - 1):+.1f} %" if f is not None and f_ref else "-",
+                f"{r['reg']}/{n}",
+                f"{r['reproj']:.2f}" if ok else "-",
+                vs,
+                f"{r['time']:.1f}" + (f" ({r['cpu']:.1f})" if "cpu" in r else ""),
+                r.get("note", ""),
+            ]
+        )
+    f_ref_text = f"{f_ref:.1f} px" if f_ref else "none"
+    info = (
+        f"{name} ({s['repo']}): {n} frames, {w} x {h} px, given f {given.K[0, 0]:.1f} px; "
+        f"f against {'the given (true) K' if truth is not None else ref_label} "
+        f"({f_ref_text}), poses against {ref_label}"
+    )
+    return info, rows
+
+
+AUTOK_COLUMNS = [
+    "sequence",
+    "run",
+    "f start px",
+    "f found px",
+    "f vs truth or reference",
+    "registered",
+    "reprojection px (median)",
+    "vs truth or reference: rotation / translation deg / centres % of path",
+    "s (CPU s)",
+    "note",
+]
+
 COLUMNS = [
     "sequence",
     "run",
@@ -702,6 +862,11 @@ def main() -> None:
     ap.add_argument("--split", choices=("tuning", "held-out"), default="tuning")
     ap.add_argument("--only", nargs="+", default=None)
     ap.add_argument("--digests", action="store_true", help="print the held-out SHA-256 list")
+    ap.add_argument(
+        "--autok",
+        action="store_true",
+        help="without a camera file: the focal lengths found (imageform, pycolmap)",
+    )
     args = ap.parse_args()
     if args.prepare is not None:
         for name in args.only or SEQUENCES:
@@ -721,17 +886,20 @@ def main() -> None:
             raise SystemExit("the held-out sources differ from the frozen SHA-256 list")
     import pycolmap
 
-    print(header(f"Structure from motion on fresh real sequences: the {args.split} half"))
+    title = f"Structure from motion on fresh real sequences: the {args.split} half"
+    if args.autok:
+        title = f"Reconstruction without a camera file: the {args.split} half"
+    print(header(title))
     load = " / ".join(Path("/proc/loadavg").read_text().split()[:3])
     print(f"load average: {load} (a shared machine); pycolmap {pycolmap.__version__}\n")
     rows: list[list[Any]] = []
     infos = []
     for name in names:
-        info, r = sequence_table(name, args.data)
+        info, r = (autok_table if args.autok else sequence_table)(name, args.data)
         infos.append(f"- {info}")
         rows += r
     print("\n".join(infos) + "\n")
-    print(markdown_table(COLUMNS, rows))
+    print(markdown_table(AUTOK_COLUMNS if args.autok else COLUMNS, rows))
 
 
 if __name__ == "__main__":

@@ -108,6 +108,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "endo-real": "benchmarks/check_endo_real.py",
     "interlace": "benchmarks/check_interlace.py",
     "sfm-fresh": "benchmarks/check_sfm_fresh.py",
+    "sfm-autok": "benchmarks/check_sfm_fresh.py",
     "sfm-intruders": "benchmarks/check_sfm_intruders.py",
     "sfm-dense": "benchmarks/check_sfm_dense.py",
     "pair-pose": "benchmarks/check_pair_pose.py",

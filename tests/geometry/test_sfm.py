@@ -71,6 +71,48 @@ def test_walk_through_a_room_of_photographs() -> None:
     assert np.median(Xc[:, 2]) > 0
 
 
+def test_focal_length_refined_from_a_guess_30_percent_off() -> None:
+    """A 500 px camera started at 650 px (and at 350 px): f within 2 %, the trajectory as with
+    the true K (COLMAP refines a guessed focal length in its bundle adjustments alike)."""
+    K = np.array([[500.0, 0, 319.5], [0, 500.0, 239.5], [0, 0, 1]])
+    frames, truth = sfm_scenes.sequence(K, 12, (640, 480))
+    C_true = np.array([-R.T @ t for R, t in truth])
+
+    notes: list[str] = []
+    fits: list[float | None] = []
+
+    def run(f0: float, refine: bool) -> tuple[float, float, float]:
+        K0 = K.copy()
+        K0[0, 0] = K0[1, 1] = f0
+        rec = reconstruct_sequence(frames, K0, max_features=2000, refine_focal=refine)
+        notes[:] = rec.notes
+        fits.append(rec.focal_fit_px)
+        assert rec.registered.all(), rec.notes
+        assert rec.K is not None and rec.K[1, 1] == rec.K[0, 0]
+        np.testing.assert_array_equal(rec.K[:2, 2], K[:2, 2])
+        C = np.array([-R.T @ t for R, t in zip(rec.R, rec.t, strict=True)])
+        rot = float(sfm_scenes.rotation_errors_deg(rec.R, truth).max())
+        return float(rec.K[0, 0]), sfm_scenes.align_rms(C, C_true), rot
+
+    f, path_true, rot_true = run(500.0, False)
+    assert f == 500.0 and path_true < 0.001 and rot_true < 0.2  # 0.04 %, 0.06 degrees
+    # the check of a K held: the true one fits, no note
+    assert fits[-1] == pytest.approx(500.0, rel=0.02) and notes == []
+    for f0 in (650.0, 350.0):
+        f, path, rot = run(f0, True)
+        assert f == pytest.approx(500.0, rel=0.02), f0
+        assert path < 0.002 and rot < 0.5, (f0, path, rot)  # 0.04 to 0.09 %, 0.1 to 0.25 deg
+    # held at 650 px: the trajectory bends (4.7 % of the path, 13 degrees)
+    f, path, rot = run(650.0, False)
+    assert f == 650.0 and path > 0.02 and rot > 5.0
+    # ... and its check flags it: the refined f is more than 10 % off the given (516 px: a
+    # bundle adjustment from the bent structure moves only part of the way)
+    assert fits[-1] is not None and fits[-1] < 0.85 * 650.0, fits
+    (note,) = (n for n in notes if "fits the frames poorly" in n)
+    assert f"finds f = {fits[-1]:.1f} px, the camera's is 650.0 px" in note
+    assert fits[1:3] == [None, None]  # refined: no check
+
+
 @pytest.mark.parametrize(
     "order",
     [

@@ -95,6 +95,38 @@ def test_normal_equations_kernel_matches_the_array_path(lens: bool) -> None:
             np.testing.assert_allclose(y, x, rtol=0, atol=tol * max(1.0, np.abs(x).max()))
 
 
+@pytest.mark.parametrize("kernel", PATHS)
+def test_focal_length_refined_with_the_poses(kernel: bool) -> None:
+    """Noiseless views of a 500 px camera, started at 650 px: 500 px found, the views fit.
+
+    The focal length's derivative (u - c) / f against central differences of the
+    projection, then both paths (numba and arrays) find the same f.
+    """
+    (K, R, t, X, ci, pi, _, fixed, _), _ = _problem(False)
+    Xc = np.einsum("mij,mj->mi", R[ci], X[pi]) + t[ci]
+    uv = (Xc @ K.T)[:, :2] / Xc[:, 2:]  # the perturbed scene's exact views
+    h = 1e-3
+    Kp, Km = K.copy(), K.copy()
+    Kp[:2, :2] *= (500 + h) / 500
+    Km[:2, :2] *= (500 - h) / 500
+    num = ((Xc @ Kp.T)[:, :2] / Xc[:, 2:] - (Xc @ Km.T)[:, :2] / Xc[:, 2:]) / (2 * h)
+    np.testing.assert_allclose(num, (uv - K[:2, 2]) / 500, rtol=0, atol=1e-9)
+    K0 = K.copy()
+    K0[:2, :2] *= 1.3
+    R1, t1, X1, K1 = sfm_mod._schur_lm(
+        K0, R, t, X, ci, pi, uv, fixed, 0.0, 100, kernel=kernel, focal=True
+    )
+    assert K1[0, 0] == pytest.approx(500.0, rel=1e-4) and K1[1, 1] == K1[0, 0]
+    np.testing.assert_array_equal(K1[:2, 2], K[:2, 2])  # the principal point held
+    Xc1 = np.einsum("mij,mj->mi", R1[ci], X1[pi]) + t1[ci]
+    assert np.abs((Xc1 @ K1.T)[:, :2] / Xc1[:, 2:] - uv).max() < 1e-3
+    # without focal: K returned as given, and the views do not fit
+    R2, t2, X2, K2 = sfm_mod._schur_lm(K0, R, t, X, ci, pi, uv, fixed, 0.0, 100, kernel=kernel)
+    np.testing.assert_array_equal(K2, K0)
+    Xc2 = np.einsum("mij,mj->mi", R2[ci], X2[pi]) + t2[ci]
+    assert np.abs((Xc2 @ K0.T)[:, :2] / Xc2[:, 2:] - uv).max() > 0.1
+
+
 def _old_match(a: np.ndarray, b: np.ndarray, ratio: float = 0.8) -> np.ndarray:
     """``match_features`` before: the mutual check from a second product ``b a^T``."""
     a, b = a.astype(np.float32), b.astype(np.float32)

@@ -101,6 +101,11 @@ def test_points_metrics_and_report(run: tuple[Path, dict, list]) -> None:
     assert metrics["observations"] == int(ply["track_length"].sum())
     assert set(metrics["seconds"]) == {"read", "reconstruct", "write", "report"}
     assert metrics["options"]["max_features"] == 1000 and metrics["unregistered"] == []
+    # the camera file's K held, and checked: a bundle adjustment refining f finds it again
+    intr = metrics["intrinsics"]
+    assert intr["source"] == "camera file" and not intr["refined"]
+    assert intr["focal_px"] == 240.0 and intr["focal_px_fit"] == pytest.approx(240.0, rel=0.02)
+    assert not any("fits the frames poorly" in n for n in metrics["notes"])
     html = (out / "report.html").read_text()
     for part in ("Cameras and points", "Reprojection errors", "What failed", "view7.png"):
         assert part in html
@@ -332,3 +337,189 @@ def test_mask_option(
         capsys,
     )
     assert "zero everywhere" in err
+
+
+# ------------------------------------------------------------------ without a camera file
+
+
+@pytest.fixture
+def seen_K(monkeypatch: pytest.MonkeyPatch) -> list:
+    """The stand-in reconstruction, recording the K and distortion it is given."""
+    seen: list = []
+
+    def fake(images: list, K: object, distortion: object = None, **kw: object) -> Reconstruction:
+        seen.append((np.asarray(K, float), distortion, kw))
+        return _fake(images, K, distortion, **kw)
+
+    monkeypatch.setattr(imageform.geometry, "reconstruct_sequence", fake)
+    return seen
+
+
+def test_without_a_camera_file_k_is_guessed_from_exif_or_the_size(
+    seen_K: list, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from PIL import Image
+
+    # PNGs without EXIF: COLMAP's guess, f = 1.2 x max(64, 48) = 76.8 px, center (31.5, 23.5)
+    frames = _blank_frames(tmp_path / "frames", 3)
+    out = tmp_path / "out"
+    assert main(["reconstruct", str(frames), "-o", str(out)]) == 0
+    K0, dist, _ = seen_K[-1]
+    np.testing.assert_allclose(K0, [[76.8, 0, 31.5], [0, 76.8, 23.5], [0, 0, 1]])
+    assert dist is None
+    err = capsys.readouterr().err
+    assert "no camera file: f = 76.8 px from no EXIF focal length: COLMAP's guess" in err
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["camera"] is None
+    assert metrics["intrinsics"]["source"] == "guess"
+    assert metrics["intrinsics"]["focal_px_initial"] == pytest.approx(76.8)
+    # JPEGs whose EXIF gives a 35 mm equivalent of 26 mm: f = 26 sqrt(64^2 + 48^2) / 43.27
+    # = 48.07 px (imageform.io.exif_camera; 43.27 mm the 36 x 24 mm frame's diagonal)
+    jpegs = tmp_path / "jpegs"
+    jpegs.mkdir()
+    ex = Image.Exif()
+    ex.get_ifd(0x8769).update({0xA405: 26, 0x920A: 4.3})
+    for i in range(3):
+        Image.fromarray(np.full((48, 64, 3), 90, np.uint8)).save(jpegs / f"p{i}.jpg", exif=ex)
+    assert main(["reconstruct", str(jpegs), "-o", str(tmp_path / "o2")]) == 0
+    f_exif = 26 * 80 / np.hypot(36, 24)
+    np.testing.assert_allclose(seen_K[-1][0][[0, 1], [0, 1]], [f_exif, f_exif])
+    assert "the EXIF 35 mm equivalent focal length of p0.jpg" in capsys.readouterr().err
+    metrics = json.loads((tmp_path / "o2" / "metrics.json").read_text())
+    assert metrics["intrinsics"]["source"] == "exif"
+    # --focal gives it
+    assert main(["reconstruct", str(jpegs), "--focal", "55", "-o", str(tmp_path / "o3")]) == 0
+    np.testing.assert_allclose(seen_K[-1][0], [[55, 0, 31.5], [0, 55, 23.5], [0, 0, 1]])
+    assert "f = 55.0 px from --focal" in capsys.readouterr().err
+
+
+def test_focal_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A usage error (exit 2) in one line, nothing written."""
+    camera = write_camera(tmp_path / "cam.toml", Camera(K, image_size=(64, 48)))
+    frames = _blank_frames(tmp_path / "frames", 3)
+    out = tmp_path / "out"
+
+    def usage(args: list[str]) -> str:
+        capsys.readouterr()
+        code = main([*args, "-o", str(out)])
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1, err
+        assert not out.exists()
+        return err
+
+    err = usage(["reconstruct", str(frames), "--camera", str(camera), "--focal", "50"])
+    assert "expected --camera FILE or --focal PX, got both" in err
+    for bad in ("0", "-3"):
+        assert "expected --focal > 0 pixels" in usage(["reconstruct", str(frames), "--focal", bad])
+    for bad in ("nan", "inf"):
+        assert "expected --focal as a finite number" in usage(
+            ["reconstruct", str(frames), "--focal", bad]
+        )
+
+
+def test_room_without_a_camera_file_at_the_true_focal(
+    room: tuple[Path, Path, list], tmp_path: Path
+) -> None:
+    frames, _, truth = room
+    out = tmp_path / "out"
+    assert main(["reconstruct", str(frames), "--focal", "240", "-o", str(out),
+                 "--max-features", "1000"]) == 0  # fmt: skip
+    rows = _read(out / "cameras.csv")
+    assert all(r["registered"] == "1" for r in rows)
+    C_est = []
+    for r in rows:
+        R = np.asarray(rvec_to_matrix([float(r[k]) for k in ("rx", "ry", "rz")]))
+        C_est.append(-R.T @ np.array([float(r[k]) for k in ("tx", "ty", "tz")]))
+    C_true = np.array([-R.T @ t for R, t in truth])
+    assert sfm_scenes.align_rms(np.array(C_est), C_true) < 0.01
+
+
+def test_room_without_a_camera_file_refines_the_guess(
+    room: tuple[Path, Path, list], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """PNGs without EXIF: f = 1.2 x 320 = 384 px guessed (the truth 240 px: 60 % off), then
+    refined by bundle adjustment to within 2 %; the trajectory within 1 % of the path."""
+    frames, _, truth = room
+    out = tmp_path / "out"
+    assert main(["reconstruct", str(frames), "-o", str(out), "--max-features", "1000"]) == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    intr = metrics["intrinsics"]
+    assert intr["source"] == "guess" and intr["focal_px_initial"] == 384.0 and intr["refined"]
+    assert intr["focal_px"] == pytest.approx(240.0, rel=0.02)
+    assert "refined by bundle adjustment to f = 24" in capsys.readouterr().err
+    rows = _read(out / "cameras.csv")
+    assert all(r["registered"] == "1" for r in rows)
+    C_est = []
+    for r in rows:
+        R = np.asarray(rvec_to_matrix([float(r[k]) for k in ("rx", "ry", "rz")]))
+        C_est.append(-R.T @ np.array([float(r[k]) for k in ("tx", "ty", "tz")]))
+    C_true = np.array([-R.T @ t for R, t in truth])
+    assert sfm_scenes.align_rms(np.array(C_est), C_true) < 0.01
+
+
+def test_refine_focal_is_asked_with_a_camera_file_or_focal(seen_K: list, tmp_path: Path) -> None:
+    camera = write_camera(tmp_path / "cam.toml", Camera(K, image_size=(64, 48)))
+    frames = _blank_frames(tmp_path / "frames", 3)
+    runs = [
+        (["--camera", str(camera)], False),
+        (["--camera", str(camera), "--refine-focal"], True),
+        (["--focal", "50"], False),
+        (["--focal", "50", "--refine-focal"], True),
+        ([], True),
+    ]
+    for i, (args, refine) in enumerate(runs):
+        out = tmp_path / f"o{i}"
+        assert main(["reconstruct", str(frames), *args, "-o", str(out)]) == 0
+        assert seen_K[-1][2]["refine_focal"] is refine, args
+        assert json.loads((out / "metrics.json").read_text())["intrinsics"]["refined"] is refine
+
+
+def test_a_camera_file_whose_focal_length_fits_poorly_is_flagged(
+    room: tuple[Path, Path, list], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The room's frames (f = 240 px) with a camera file at 360 px: one note line."""
+    frames, _, _ = room
+    wrong = K.copy()
+    wrong[0, 0] = wrong[1, 1] = 360.0
+    camera = write_camera(tmp_path / "wrong.toml", Camera(wrong, image_size=SIZE))
+    out = tmp_path / "out"
+    args = ["reconstruct", str(frames), "--camera", str(camera), "-o", str(out)]
+    assert main([*args, "--max-features", "1000"]) == 0
+    fit = json.loads((out / "metrics.json").read_text())["intrinsics"]["focal_px_fit"]
+    assert fit < 0.85 * 360.0
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if "fits the frames poorly" in ln]
+    assert len(lines) == 1, lines
+    assert f"finds f = {fit:.1f} px, the camera's is 360.0 px" in lines[0]
+    assert "imageform reconstruct --refine-focal" in lines[0]
+
+
+def test_room_photographs_with_exif_focal_length(
+    room: tuple[Path, Path, list], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The room's frames as JPEGs whose EXIF says 26 mm (35 mm equivalent): f = 26 x 400 /
+    43.27 = 240.4 px (the truth 240 px), refined; the trajectory within 1 % of the path."""
+    from PIL import Image
+
+    frames, _, truth = room
+    jpegs = tmp_path / "jpegs"
+    jpegs.mkdir()
+    ex = Image.Exif()
+    ex.get_ifd(0x8769).update({0xA405: 26})
+    for png in sorted(frames.glob("*.png")):
+        with Image.open(png) as im:
+            im.convert("RGB").save(jpegs / (png.stem + ".jpg"), quality=95, exif=ex)
+    out = tmp_path / "out"
+    assert main(["reconstruct", str(jpegs), "-o", str(out), "--max-features", "1000"]) == 0
+    intr = json.loads((out / "metrics.json").read_text())["intrinsics"]
+    assert intr["source"] == "exif" and intr["refined"]
+    assert intr["focal_px_initial"] == pytest.approx(26 * 400 / np.hypot(36, 24))
+    assert intr["focal_px"] == pytest.approx(240.0, rel=0.02)
+    assert "the EXIF 35 mm equivalent focal length of view0.jpg" in capsys.readouterr().err
+    rows = _read(out / "cameras.csv")
+    assert all(r["registered"] == "1" for r in rows)
+    C_est = []
+    for r in rows:
+        R = np.asarray(rvec_to_matrix([float(r[k]) for k in ("rx", "ry", "rz")]))
+        C_est.append(-R.T @ np.array([float(r[k]) for k in ("tx", "ty", "tz")]))
+    C_true = np.array([-R.T @ t for R, t in truth])
+    assert sfm_scenes.align_rms(np.array(C_est), C_true) < 0.01

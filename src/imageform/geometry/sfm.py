@@ -319,6 +319,13 @@ class Reconstruction:
     residuals_px : ndarray (M,)
         The reprojection error of every observation the final bundle adjustment kept
         (pixels; the distance between the observed keypoint and its point's projection).
+    K : ndarray (3, 3) or None
+        The camera matrix of the final bundle adjustment: the one given, or with its focal
+        length refined (``refine_focal``).
+    focal_fit_px : float or None
+        With ``K`` held: the focal length one more bundle adjustment finds when it refines
+        it from the final poses and points (a check of the given ``K``: a note when it
+        differs by more than 10 %); None when ``refine_focal`` or fewer than 3 frames.
     """
 
     R: F64
@@ -330,6 +337,16 @@ class Reconstruction:
     rms_px: F64
     notes: list[str] = field(default_factory=list)
     residuals_px: F64 = field(default_factory=lambda: np.zeros(0))
+    K: F64 | None = None
+    focal_fit_px: float | None = None
+
+
+#: A given focal length is flagged when a bundle adjustment that refines it moves it by more
+#: than this share (:func:`reconstruct_sequence`'s note). The check moves only part of the
+#: way from the structure built with the given one (the figurine's 523.8 px -> 656.3 px for
+#: pycolmap's 1087.4 px, benchmarks/results/sfm-autok-2026-11-30e.md); the true K moves by
+#: 2 % at most on the rendered room and Middlebury's temple and dino.
+_FOCAL_CHECK = 0.1
 
 
 def _angle_deg(C1: F64, C2: F64, X: F64) -> F64:
@@ -587,7 +604,8 @@ def _schur_lm(
     ftol: float = 1e-10,
     A: F64 | None = None,
     kernel: bool | None = None,
-) -> tuple[F64, F64, F64]:
+    focal: bool = False,
+) -> tuple[F64, F64, F64, F64]:
     r"""Levenberg-Marquardt on the reprojection error, the points eliminated (Schur complement).
 
     Each camera moves by a rotation :math:`\exp([\omega]_\times) R` and a translation
@@ -610,6 +628,14 @@ def _schur_lm(
     kernels (``imageform._kernels.bundle``) where numba runs (``kernel`` None:
     :func:`imageform._backend.use_numba`), else by array operations: the same sums in
     another order.
+
+    ``focal``: the focal length is refined too, one for every camera (COLMAP's default
+    for a camera whose focal length was guessed): ``fx``, ``fy`` and the skew scale
+    together (their ratios stay), the principal point stays. Its derivative is
+    :math:`\partial u / \partial f_x = (u - c) / f_x`; it adds one row and column to the
+    reduced camera system (its coupling with each camera's 6 parameters and with each
+    point's 3, summed in NumPy beside the kernels). Returns ``R``, ``t``, ``X`` and ``K``
+    (the refined camera matrix; ``K`` itself without ``focal``).
     """
     from scipy.linalg import cho_factor, cho_solve
 
@@ -624,7 +650,6 @@ def _schur_lm(
     cs = slot[ci]
     has = cs >= 0
     csh, pih = cs[has], pi[has]
-    fx, fy, sk = K[0, 0], K[1, 1], K[0, 1]
     eye3, eye6 = np.eye(3), np.eye(6)
     # W V^-1 W^T, the blocks summed over the points two free cameras share: laid out once
     if kernel is None:
@@ -644,7 +669,7 @@ def _schur_lm(
         """Return the blocks :math:`A_m^T B_m` of two (M, 2, k) stacks."""
         return np.matmul(A.transpose(0, 2, 1), B)
 
-    def evaluate(R: F64, t: F64, X: F64) -> tuple[F64, F64, float, F64]:
+    def evaluate(R: F64, t: F64, X: F64, K: F64) -> tuple[F64, F64, float, F64]:
         proj, z = _project_obs(K, R[ci], t[ci], X[pi])
         r = proj - uv
         if A is not None:
@@ -657,8 +682,29 @@ def _schur_lm(
         w[bad] = 0.0
         return r, r2, cost + 1e6 * float(bad.sum()), w
 
-    R, t, X = R.copy(), t.copy(), X.copy()
-    res, _, cost, w = evaluate(R, t, X)
+    def jacobians(R: F64, t: F64, X: F64, K: F64) -> tuple[F64, F64, F64]:
+        """Return each view's d/dX (M, 2, 3), d/d(omega, t) of the free (Mh, 2, 6), d/dfx."""
+        fx, fy, sk = K[0, 0], K[1, 1], K[0, 1]
+        RX = np.einsum("mij,mj->mi", R[ci], X[pi])
+        Xc = RX + t[ci]
+        z = np.where(np.abs(Xc[:, 2]) > 1e-9, Xc[:, 2], 1e-9)
+        Jp = np.zeros((M, 2, 3))  # d(u, v) / d Xc
+        Jp[:, 0, 0] = fx / z
+        Jp[:, 0, 1] = sk / z
+        Jp[:, 0, 2] = -(fx * Xc[:, 0] + sk * Xc[:, 1]) / z**2
+        Jp[:, 1, 1] = fy / z
+        Jp[:, 1, 2] = -fy * Xc[:, 1] / z**2
+        # d(u, v) / d fx with fy and the skew scaled alike: (u - c) / fx
+        Jf = (Xc[:, :2] @ K[:2, :2].T) / z[:, None] / fx
+        if A is not None:
+            Jp = A @ Jp
+            Jf = np.einsum("mij,mj->mi", A, Jf)
+        Jx = Jp @ R[ci]  # d/dX
+        Jc = np.concatenate([-Jp @ _skew_batch(RX), Jp], axis=2)[has]  # d/d(omega, t)
+        return Jx, Jc, Jf
+
+    R, t, X, K = R.copy(), t.copy(), X.copy(), np.array(K, np.float64)
+    res, _, cost, w = evaluate(R, t, X, K)
     lam = 1e-3
     gain = 0.0
     for _ in range(max_iter):
@@ -666,20 +712,10 @@ def _schur_lm(
             U, V = np.zeros((nf, 6, 6)), np.zeros((m, 3, 3))
             gc, gp, Wo = np.zeros((nf, 6)), np.zeros((m, 3)), np.empty((Mh, 6, 3))
             normal_equations(K, R, t, X, ci, pi, cs, hpos, res, w, A_k, U, V, gc, gp, Wo)
+            if focal:
+                Jx, Jc, Jf = jacobians(R, t, X, K)
         else:
-            RX = np.einsum("mij,mj->mi", R[ci], X[pi])
-            Xc = RX + t[ci]
-            z = np.where(np.abs(Xc[:, 2]) > 1e-9, Xc[:, 2], 1e-9)
-            Jp = np.zeros((M, 2, 3))  # d(u, v) / d Xc
-            Jp[:, 0, 0] = fx / z
-            Jp[:, 0, 1] = sk / z
-            Jp[:, 0, 2] = -(fx * Xc[:, 0] + sk * Xc[:, 1]) / z**2
-            Jp[:, 1, 1] = fy / z
-            Jp[:, 1, 2] = -fy * Xc[:, 1] / z**2
-            if A is not None:
-                Jp = A @ Jp
-            Jx = Jp @ R[ci]  # d/dX
-            Jc = np.concatenate([-Jp @ _skew_batch(RX), Jp], axis=2)[has]  # d/d(omega, t)
+            Jx, Jc, Jf = jacobians(R, t, X, K)
             wJx = Jx * w[:, None, None]
             V = _sum_blocks(pi, gram(wJx, Jx), m)
             gp = _sum_blocks(pi, -(wJx[:, 0] * res[:, :1] + wJx[:, 1] * res[:, 1:]), m)
@@ -688,6 +724,12 @@ def _schur_lm(
             rh = res[has]
             gc = _sum_blocks(csh, -(wJc[:, 0] * rh[:, :1] + wJc[:, 1] * rh[:, 1:]), nf)
             Wo = gram(wJc, Jx[has])  # (Mh, 6, 3)
+        if focal:  # the focal length's row: with itself, each free camera, each point
+            wJf = Jf * w[:, None]
+            Uff = float(np.sum(wJf * Jf))
+            gf = -float(np.sum(wJf * res))
+            Ucf = _sum_blocks(csh, np.einsum("mki,mk->mi", Jc, wJf[has]), nf)  # (nf, 6)
+            Wf = _sum_blocks(pi, np.einsum("mk,mki->mi", wJf, Jx), m)  # (m, 3)
         dV = np.diagonal(V, axis1=1, axis2=2)
         dU = np.diagonal(U, axis1=1, axis2=2)
         improved = False
@@ -699,30 +741,53 @@ def _schur_lm(
             ar = np.arange(nf)
             S4[ar, :, ar, :] += U + (lam * dU + 1e-12)[:, :, None] * eye6
             b = gc - _sum_blocks(csh, np.einsum("mij,mj->mi", Y, gp[pih]), nf)
+            if focal:
+                VWf = np.einsum("mij,mj->mi", Vinv, Wf)  # V^-1 Wf^T, a point at a time
+                col = Ucf - _sum_blocks(csh, np.einsum("mij,mj->mi", Y, Wf[pih]), nf)
+                S = np.block(
+                    [
+                        [S, col.reshape(-1, 1)],
+                        [
+                            col.reshape(1, -1),
+                            np.array([[(1 + lam) * Uff + 1e-12 - float(np.sum(Wf * VWf))]]),
+                        ],
+                    ]
+                )
+                b = np.append(b.ravel(), gf - float(np.sum(VWf * gp)))
             try:
                 dc = cho_solve(cho_factor(S, check_finite=False), b.ravel(), check_finite=False)
             except np.linalg.LinAlgError:
                 lam *= 10.0
                 continue
+            K1 = K
+            gpf = gp
+            if focal:
+                df, dc = float(dc[-1]), dc[:-1]
+                if not K[0, 0] + df > 0:
+                    lam *= 8.0
+                    continue
+                K1 = K.copy()
+                K1[:2, :2] *= (K[0, 0] + df) / K[0, 0]
+                gpf = gp - Wf * df
             dc6 = dc.reshape(nf, 6)
             wtdc = _sum_blocks(pih, np.einsum("mji,mj->mi", Wo, dc6[csh]), m)
-            dp = np.einsum("mij,mj->mi", Vinv, gp - wtdc)
+            dp = np.einsum("mij,mj->mi", Vinv, gpf - wtdc)
             R1, t1 = R.copy(), t.copy()
             if nf:
                 R1[free] = np.asarray(rvec_to_matrix(dc6[:, :3]), np.float64) @ R[free]
                 t1[free] = t[free] + dc6[:, 3:]
             X1 = X + dp
-            res1, _, cost1, w1 = evaluate(R1, t1, X1)
+            res1, _, cost1, w1 = evaluate(R1, t1, X1, K1)
             if cost1 < cost:
                 gain = (cost - cost1) / max(cost, 1e-300)
-                R, t, X, res, cost, w = R1, t1, X1, res1, cost1, w1
+                R, t, X, K, res, cost, w = R1, t1, X1, K1, res1, cost1, w1
                 lam = max(lam / 5.0, 1e-9)
                 improved = True
                 break
             lam *= 8.0
         if not improved or gain < ftol:
             break
-    return R, t, X
+    return R, t, X, K
 
 
 def bundle_adjust(
@@ -798,7 +863,7 @@ def bundle_adjust(
     f = as_int(fixed, "fixed", minimum=0, maximum=max(n - 1, 0))
     keep = np.zeros(n, bool)
     keep[f] = True
-    return _schur_lm(
+    Rb, tb, Xb, _ = _schur_lm(
         k,
         R,
         t,
@@ -810,6 +875,7 @@ def bundle_adjust(
         float(loss_px),
         as_int(max_nfev, "max_nfev", minimum=1, maximum=100_000),
     )
+    return Rb, tb, Xb
 
 
 def _triangulate_tracks(
@@ -1054,6 +1120,7 @@ def reconstruct_sequence(
     rng: int = 0,
     masks: ArrayLike | Sequence[ArrayLike | None] | None = None,
     contrast_threshold: float = 0.04,
+    refine_focal: bool = False,
 ) -> Reconstruction:
     """Reconstruct the cameras and a sparse point cloud from an ordered image sequence.
 
@@ -1082,6 +1149,16 @@ def reconstruct_sequence(
         only what moves rigidly with the scene may be kept). None: everywhere.
     contrast_threshold : float
         SIFT's contrast threshold (:func:`detect_features`): 0.01 for endoscopic tissue.
+    refine_focal : bool
+        Refine the focal length in the bundle adjustments of every registered frame once
+        three are registered, and in the final one (one focal length for every frame, the
+        principal point and the aspect ratio kept: COLMAP's default for a focal length it
+        guessed); when it moves by more than 5 %, the reconstruction starts again from
+        the one found (twice at most: the first frames were registered with a wrong one).
+        Else ``K`` is held, and checked: one more bundle adjustment that
+        refines the focal length from the final poses and points, a note when it moves
+        by more than 10 % (the result's ``focal_fit_px``). The result's ``K`` is the one
+        found.
 
     Returns
     -------
@@ -1107,8 +1184,54 @@ def reconstruct_sequence(
         "rng": rng,
         "masks": masks,
         "contrast_threshold": contrast_threshold,
+        "refine_focal": bool(refine_focal),
         "cache": cache,
     }
+    best = _one_model(images, K, distortion, kw)
+    if not refine_focal:
+        return best
+    # the focal length moved far from where it started: the first frames were registered
+    # with a wrong one (and some not at all); again from the one found, twice at most
+    K_start = np.array(K, np.float64)
+    said: list[str] = []
+    for _ in range(2):
+        assert best.K is not None
+        start, found = float(K_start[0, 0]), float(best.K[0, 0])
+        if abs(found / start - 1) < _FOCAL_RESTART:
+            break
+        K1 = K_start.copy()
+        K1[:2, :2] *= found / start
+        cache.pop("pairs", None)  # verified with the other K; the keypoints stay
+        try:
+            again = _one_model(images, K1, distortion, kw)
+        except DegenerateConfigurationError:
+            break
+        note = (
+            f"the focal length moved from {start:.1f} px to {found:.1f} px: reconstructed "
+            f"again from {found:.1f} px, found "
+            f"{float(again.K[0, 0]) if again.K is not None else found:.1f} px"
+        )
+        if int(again.registered.sum()) < int(best.registered.sum()):
+            best = replace(best, notes=[*best.notes, note + ", fewer frames: not kept"])
+            break
+        said.append(note)
+        best = replace(again, notes=[*again.notes, *said])
+        K_start = K1
+    return best
+
+
+#: With ``refine_focal``: a focal length that moves by more than this share starts the
+#: reconstruction again from the one found (:func:`reconstruct_sequence`).
+_FOCAL_RESTART = 0.05
+
+
+def _one_model(
+    images: Sequence[ArrayLike],
+    K: ArrayLike,
+    distortion: DistortionModel | None,
+    kw: dict[str, Any],
+) -> Reconstruction:
+    """Reconstruct the largest model of up to three starts (:func:`reconstruct_sequence`)."""
     best = _reconstruct(images, K, distortion, **kw, starts=None)
     n = len(images)
     # one model holds fewer than half the frames: the sequence may have a larger part its
@@ -1147,6 +1270,7 @@ def _reconstruct(
     contrast_threshold: float,
     cache: dict[str, Any],
     starts: frozenset[int] | None,
+    refine_focal: bool = False,
 ) -> Reconstruction:
     """Reconstruct one model (:func:`reconstruct_sequence`), started from a pair in ``starts``.
 
@@ -1162,7 +1286,7 @@ def _reconstruct(
     shapes = {np.asarray(im).shape[:2] for im in images}
     if len(shapes) != 1:
         raise InvalidInputError(f"expected frames of one size, got {sorted(shapes)}")
-    k = np.asarray(K, np.float64)
+    k = np.array(K, np.float64)  # a copy: refine_focal changes it
     win = as_int(window, "window", minimum=1, maximum=100)
     ct = as_real(contrast_threshold, "contrast_threshold", positive=True, maximum=1.0)
     n = len(images)
@@ -1386,8 +1510,8 @@ def _reconstruct(
         good = fin & ~bad & (2.0 * spread >= 1.5)
         P[tids[good]] = X[good]
 
-    def adjust(delta: float, iters: int) -> None:
-        """Bundle adjustment over every registered frame and point."""
+    def adjust(delta: float, iters: int, focal: bool = False) -> None:
+        """Bundle adjustment over every registered frame and point (``focal``: and ``k``'s f)."""
         ids = np.flatnonzero(o_ok & registered[o_frame] & has_point()[o_track])
         if ids.size == 0:
             return
@@ -1396,7 +1520,7 @@ def _reconstruct(
         R0 = np.where(registered[:, None, None], Rs, np.eye(3))
         t0 = np.where(registered[:, None], ts, 0.0)
         pts, pslot = np.unique(o_track[ids], return_inverse=True)
-        Rn, tn, Xn = _schur_lm(
+        Rn, tn, Xn, Kn = _schur_lm(
             k,
             R0,
             t0,
@@ -1408,9 +1532,35 @@ def _reconstruct(
             delta,
             iters,
             A=None if distortion is None else o_A[ids],
+            focal=focal,
         )
         Rs[registered], ts[registered] = Rn[registered], tn[registered]
         P[pts] = Xn
+        k[:] = Kn  # the keypoints' undistortion stays the given K's (a small change)
+
+    def check_focal() -> float | None:
+        """Return the focal length a final adjustment that refines it finds (K itself held)."""
+        ids = np.flatnonzero(o_ok & registered[o_frame] & has_point()[o_track])
+        if ids.size == 0 or int(registered.sum()) < 3:
+            return None
+        fixed = ~registered
+        fixed[i0] = True
+        pts, pslot = np.unique(o_track[ids], return_inverse=True)
+        *_, Kc = _schur_lm(
+            k,
+            np.where(registered[:, None, None], Rs, np.eye(3)),
+            np.where(registered[:, None], ts, 0.0),
+            P[pts],
+            o_frame[ids],
+            pslot,
+            o_uv[ids],
+            fixed,
+            0.0,
+            30,
+            A=None if distortion is None else o_A[ids],
+            focal=True,
+        )
+        return float(Kc[0, 0])
 
     def filter_obs(limit: float, min_angle: float = 0.0) -> None:
         """Drop observations beyond ``limit`` pixels; points left with one view go."""
@@ -1864,7 +2014,9 @@ def _reconstruct(
         triangulate(tr[tr >= 0])
         nreg = int(registered.sum())
         if nreg >= 1.4 * last_ba:
-            adjust(2.0, 10)
+            # the focal length too once three frames hold it (two leave it free along the
+            # baseline): a guess 70 % off converges here, not in the final adjustment
+            adjust(2.0, 10, refine_focal and nreg >= 3)
             filter_obs(max_err)
             complete(2.0)
             triangulate(np.arange(n_tracks))
@@ -1897,14 +2049,15 @@ def _reconstruct(
     notes += [why_not[fi] for fi in sorted(pending)]
     # the final adjustment: robust, outliers out, the tracks completed, merged and
     # re-triangulated, robust again, then plain least squares on what is left
-    adjust(2.0, 30)
+    adjust(2.0, 30, refine_focal)
     filter_obs(max_err)
     complete(2.0)
     triangulate(np.arange(n_tracks))
-    adjust(1.0, 30)
+    adjust(1.0, 30, refine_focal)
     filter_obs(2.0)
-    adjust(0.0, 50)
+    adjust(0.0, 50, refine_focal)
     filter_obs(2.0)
+    focal_fit = None if refine_focal else check_focal()
     # the output in the first registered frame's camera frame (frame 0 when registered):
     # X' = R_f X + t_f, R_i' = R_i R_f^T, t_i' = t_i - R_i' t_f (a rigid motion: the
     # reprojections and the initial pair's baseline stay)
@@ -1949,4 +2102,13 @@ def _reconstruct(
         y = np.clip(xy[:, 1], 0, im.shape[0] - 1)
         v = _as_uint8(im[y, x], im.dtype, im)
         colors[sel] = v[:, :3] if v.ndim == 2 else v[:, None]
-    return Reconstruction(Rs, ts, registered, Pout, colors, length, rms, notes, residuals)
+    if focal_fit is not None and abs(focal_fit / k[0, 0] - 1) > _FOCAL_CHECK:
+        notes.append(
+            f"the focal length fits the frames poorly: a bundle adjustment that refines it "
+            f"finds f = {focal_fit:.1f} px, the camera's is {k[0, 0]:.1f} px "
+            f"({100 * (focal_fit / k[0, 0] - 1):+.0f} %); check the camera (its image size, "
+            "a zoom) or refine it (refine_focal; imageform reconstruct --refine-focal)"
+        )
+    return Reconstruction(
+        Rs, ts, registered, Pout, colors, length, rms, notes, residuals, k, focal_fit
+    )

@@ -1,11 +1,11 @@
 """``imageform reconstruct``: camera poses and a coloured point cloud from a video.
 
 The course's structure-from-motion application: with the intrinsics known (a camera file),
-the frames of a video (a file, a folder or a glob of images) give the camera's motion and the
-scene's shape up to a similarity. The maths lives in
-:func:`imageform.geometry.reconstruct_sequence`; this module reads the frames, writes
-``cameras.csv``, ``points.ply``, ``report.html`` and ``metrics.json`` into the output folder
-(all or nothing), and reports the time and the errors.
+or a focal length from the EXIF or guessed and refined, the frames of a video (a file, a
+folder or a glob of images) give the camera's motion and the scene's shape up to a similarity.
+The maths lives in :func:`imageform.geometry.reconstruct_sequence`; this module reads the
+frames, writes ``cameras.csv``, ``points.ply``, ``report.html`` and ``metrics.json`` into the
+output folder (all or nothing), and reports the time and the errors.
 """
 
 from __future__ import annotations
@@ -52,10 +52,26 @@ METRICS_FORMAT = "imageform-reconstruction"
 class ReconstructOptions(Options):
     """Options of ``imageform reconstruct``."""
 
-    camera: Path = option(
-        help="Camera file of the frames' camera (K and distortion: imageform calibrate).",
+    camera: Path | None = option(
+        None,
+        help="Camera file of the frames' camera (K and distortion: imageform calibrate); "
+        "without it, the focal length from the frames' EXIF (35 mm equivalent) or "
+        "1.2 x max(width, height) (COLMAP's guess), the principal point at the center, no "
+        "distortion.",
         metavar="FILE",
         input=True,
+    )
+    focal: float | None = option(
+        None,
+        help="Without --camera: the focal length in pixels (the principal point at the "
+        "center, no distortion), instead of the EXIF's or the guess.",
+        metavar="PX",
+    )
+    refine_focal: bool = option(
+        False,
+        help="Refine the focal length given by --camera or --focal in the bundle "
+        "adjustments (one for every frame, the principal point held); a focal length from "
+        "the EXIF or the guess is always refined.",
     )
     max_features: int = option(
         4000, help="SIFT keypoints per frame (the strongest).", minimum=8, maximum=1_000_000
@@ -127,6 +143,11 @@ class ReconstructOptions(Options):
             )
         if self.mask is not None and self.auto_mask:
             raise InvalidInputError("expected --mask FILE or --auto-mask, got both")
+        if self.focal is not None:
+            if self.camera is not None:
+                raise InvalidInputError("expected --camera FILE or --focal PX, got both")
+            if not (math.isfinite(self.focal) and self.focal > 0):
+                raise InvalidInputError(f"expected --focal > 0 pixels, got {self.focal:g}")
 
 
 def _hint(opts: ReconstructOptions) -> str:
@@ -149,8 +170,10 @@ def _fmt(x: float) -> str:
 
 def _read_frames(
     source: str, opts: ReconstructOptions, size: tuple[int, int] | None
-) -> tuple[list[Any], list[str], Any]:
+) -> tuple[list[Any], list[str], Any, Path | None]:
     """Read the frames (every ``--every``-th, at most ``--max-frames``), their names, the reader.
+
+    The last: the first frame's file (None for a video's frames).
 
     An interlaced video read as fields (``--deinterlace``) gives the first field of each frame.
     """
@@ -168,6 +191,7 @@ def _read_frames(
         )
     images: list[Any] = []
     names: list[str] = []
+    first: Path | None = None
     with reader:
         for frame in reader:
             index = frame.index
@@ -178,10 +202,12 @@ def _read_frames(
             if index % opts.every:
                 continue
             images.append(frame.image)
+            if not images[1:]:
+                first = frame.path
             names.append(frame.path.name if frame.path is not None else f"frame_{index:06d}")
             if opts.max_frames is not None and len(images) >= opts.max_frames:
                 break
-    return images, names, reader
+    return images, names, reader, first
 
 
 def _read_mask(path: Path, info: Any, field: str | None = None) -> Any:
@@ -227,6 +253,58 @@ def _masks(
     return keep, shares, fov
 
 
+def _guess_camera(
+    opts: ReconstructOptions, width: int, height: int, first: Path | None
+) -> tuple[Any, dict[str, Any]]:
+    """Return K without a camera file, and where its focal length comes from.
+
+    ``--focal``, else the first frame's EXIF focal length (its 35 mm equivalent,
+    :func:`imageform.io.exif_camera`), else COLMAP's guess f = 1.2 max(w, h); the
+    principal point at the center, no distortion.
+    """
+    import numpy as np
+
+    if opts.focal is not None:
+        f, source = float(opts.focal), "--focal"
+    else:
+        f, source = 1.2 * max(width, height), "guess"
+        if first is not None:
+            from imageform.io import exif_camera
+
+            exif = exif_camera(first)
+            if (
+                exif.focal_length_px is not None
+                and (exif.width_px, exif.height_px) == (width, height)
+                and math.isfinite(exif.focal_length_px)
+                and exif.focal_length_px > 0
+            ):
+                f, source = float(exif.focal_length_px), "exif"
+    K = np.array([[f, 0.0, (width - 1) / 2], [0.0, f, (height - 1) / 2], [0.0, 0.0, 1.0]])
+    return K, {"source": source, "focal_px_initial": f}
+
+
+def _camera_note(intr: dict[str, Any], first: Path | None) -> str:
+    """Say where K comes from (no camera file)."""
+    f0 = intr["focal_px_initial"]
+    refined = (
+        f"; refined by bundle adjustment to f = {intr['focal_px']:.1f} px "
+        f"({100 * (intr['focal_px'] / f0 - 1):+.1f} %)"
+        if intr["refined"]
+        else ""
+    )
+    if intr["source"] == "camera file":
+        return f"the camera file's f = {f0:.1f} px{refined}"
+    why = {
+        "--focal": "--focal",
+        "exif": f"the EXIF 35 mm equivalent focal length of {first.name if first else ''}",
+        "guess": "no EXIF focal length: COLMAP's guess 1.2 x max(width, height)",
+    }[intr["source"]]
+    return (
+        f"no camera file: f = {f0:.1f} px from {why}, the principal point at the center, "
+        f"no distortion{refined}"
+    )
+
+
 def _metrics(rec: Any, names: list[str], seconds: dict[str, float]) -> dict[str, Any]:
     import numpy as np
 
@@ -270,16 +348,27 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     refuse_foreign_folder(
         out, run.outputs.force, _MARKERS, "reconstruct", "a previous reconstruction"
     )
-    cam = read_camera(opts.camera).camera
-    size = None if cam.image_size is None else (int(cam.image_size[0]), int(cam.image_size[1]))
+    cam = None if opts.camera is None else read_camera(opts.camera).camera
+    size = (
+        None
+        if cam is None or cam.image_size is None
+        else (int(cam.image_size[0]), int(cam.image_size[1]))
+    )
     seconds: dict[str, float] = {}
     t0 = time.perf_counter()
     if run.progress is not None:
         run.progress("reading the frames", 0.0)
-    images, names, reader = _read_frames(frames, opts, size)
+    images, names, reader, first = _read_frames(frames, opts, size)
     info = reader.info
     field = reader.field_order if getattr(reader, "deinterlaced", "off") == "fields" else None
-    K = cam.K if field is None else field_camera_matrix(cam.K, field)
+    if cam is None:
+        K_frame, intrinsics = _guess_camera(opts, info.width, info.height, first)
+        distortion = None
+    else:
+        K_frame, distortion = cam.K, cam.distortion
+        intrinsics = {"source": "camera file", "focal_px_initial": float(cam.K[0, 0])}
+    K = K_frame if field is None else field_camera_matrix(K_frame, field)
+    refine = opts.refine_focal or intrinsics["source"] in ("exif", "guess")
     if len(images) < 2:
         raise InvalidInputError(
             f"{frames}: {len(images)} frame"
@@ -312,12 +401,13 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         rec = reconstruct_sequence(
             images,
             K,
-            cam.distortion,
+            distortion,
             window=opts.window,
             max_features=opts.max_features,
             ratio=opts.ratio,
             masks=mask,
             contrast_threshold=opts.contrast_threshold,
+            refine_focal=refine,
         )
     except DegenerateConfigurationError as exc:
         raise DegenerateConfigurationError(f"{frames}: {exc}{_hint(opts)}") from exc
@@ -326,6 +416,11 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
             raise
         raise InvalidInputError(f"{frames}: {exc}{_hint(opts)}") from exc
     seconds["reconstruct"] = time.perf_counter() - t1
+    # fx: the frame's and its field's (a field halves fy)
+    intrinsics["refined"] = refine
+    intrinsics["focal_px"] = float(np.asarray(K if rec.K is None else rec.K)[0, 0])
+    # held: the focal length a bundle adjustment refining it finds (the given K's check)
+    intrinsics["focal_px_fit"] = rec.focal_fit_px
     del images
     folder = run.folder(out)
     t2 = time.perf_counter()
@@ -353,7 +448,8 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         "format": METRICS_FORMAT,
         "version": 1,
         "source": {"frames": frames, "width": info.width, "height": info.height},
-        "camera": str(opts.camera),
+        "camera": None if opts.camera is None else str(opts.camera),
+        "intrinsics": intrinsics,
         **_metrics(rec, names, seconds),
         "masks": mask_shares,
         "deinterlace": deinterlace_summary(reader),
@@ -367,6 +463,8 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     seconds["report"] = time.perf_counter() - t3
     metrics["seconds"] = {k: round(v, 3) for k, v in seconds.items()}
     write_json(folder / "metrics.json", metrics)
+    if cam is None or refine:
+        run.note(f"note: {_camera_note(intrinsics, first)}")
     deint = deinterlace_note(reader, info.fps, "reconstructing from")
     if deint:
         run.note(f"note: {deint}")
@@ -422,7 +520,8 @@ WORKFLOWS = (
         description="SIFT keypoints matched between neighbouring frames (--window), each pair "
         "verified by its essential matrix (RANSAC), the pair with the most parallax first, "
         "the other frames registered by PnP, the points triangulated, then bundle adjustment "
-        "of every pose and point (needs imageform[reconstruct]); --mask keeps the keypoints to "
+        "of every pose and point (needs imageform[reconstruct]); without --camera the focal "
+        "length from the EXIF or 1.2 x max(width, height), refined; --mask keeps the keypoints to "
         "a region of every frame, --auto-mask finds an endoscope's aperture, --highlights keeps "
         "them off specular highlights. The world is the camera "
         "frame of the first registered frame (frame 0 when registered), the initial pair's "
