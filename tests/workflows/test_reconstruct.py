@@ -368,7 +368,9 @@ def test_without_a_camera_file_k_is_guessed_from_exif_or_the_size(
     np.testing.assert_allclose(K0, [[76.8, 0, 31.5], [0, 76.8, 23.5], [0, 0, 1]])
     assert dist is None
     err = capsys.readouterr().err
-    assert "no camera file: f = 76.8 px from no EXIF focal length: COLMAP's guess" in err
+    assert (
+        "no camera file: f = 76.8 px from COLMAP's guess 1.2 x max(width, height) (no EXIF" in err
+    )
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["camera"] is None
     assert metrics["intrinsics"]["source"] == "guess"

@@ -297,7 +297,7 @@ def _camera_note(intr: dict[str, Any], first: Path | None) -> str:
     why = {
         "--focal": "--focal",
         "exif": f"the EXIF 35 mm equivalent focal length of {first.name if first else ''}",
-        "guess": "no EXIF focal length: COLMAP's guess 1.2 x max(width, height)",
+        "guess": "COLMAP's guess 1.2 x max(width, height) (no EXIF focal length)",
     }[intr["source"]]
     return (
         f"no camera file: f = {f0:.1f} px from {why}, the principal point at the center, "
