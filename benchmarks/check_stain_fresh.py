@@ -47,6 +47,13 @@ Held-out half (15 tiles, ``/tmp/stainfresh/heldout``, SHA-256 frozen before the 
   (ebb04927...), ``FAN_HoEoTp_A.jpg`` (1676a2dd...): JPEG mosaics of tiles from several
   scanners and stainings.
 
+A second held-out set, for ``benchmarks/results/stain-ihc-2026-11-30e.md`` (6 Ki67 IHC
+tiles, ``/tmp/stainihc/ihc_heldout``, SHA-256 frozen before the first run): 512 x 512 crops
+on the diagonal of petebankhead/2022-qupath-cell-detection (commit 4632a17d; OpenSlide's
+freely distributable test slide OS-2, no licence file in the repository)
+``images/OS-2-ndpi.ome.tif`` (rows/columns k = 0-3: 4d5c76c4..., 93281091..., e4c8818e...,
+13304a8a...) and ``images/OS-2-vsi.ome.tif`` (k = 0-1: d050b8e8..., 18b77855...).
+
 Per tile, with imageform's defaults (``mask="auto"``, ``i0="auto"``): the I0 it estimates
 and whether from glass; the share of the glass rule's tissue that ``tissue_mask`` keeps;
 the worst angle between imageform's and torchstain 1.4.1's stain vectors at the same I0 =
