@@ -1054,7 +1054,7 @@ def vahadane_stains(
        (projected gradient to convergence), so the objective never increases. It stops
        when a round changes ``H`` by less than :math:`10^{-7}` relatively
        (:math:`\lVert H_k - H_{k-1}\rVert_F < 10^{-7} \lVert H_k\rVert_F`) or after
-       ``iterations`` rounds (the tests' crops: 110-210). The reference implementations
+       ``iterations`` rounds (the tests' crops: 65-139). The reference implementations
        (Vahadane's MATLAB code, StainTools) use SPAMS' online dictionary learning
        (``trainDL``) on the same objective with no convergence test: StainTools keeps
        SPAMS' default ``iter=-1``, one second of mini-batches of 512 pixels from random
@@ -1083,7 +1083,7 @@ def vahadane_stains(
     max_pixels : int
         Tissue pixels used by the factorisation (the fixed lattice above). The objective
         can be flat: on one of the tests' crops two lattices of 20 000 of its 64 826
-        tissue pixels give vectors 5.4 deg apart (0.04-0.13 deg on the other); more
+        tissue pixels give vectors up to 5.45 deg apart (0.13 deg on the other); more
         pixels, slower and steadier.
     iterations : int
         At most this many rounds (they stop earlier on convergence, above).
