@@ -12,7 +12,7 @@ pixel. ``benchmarks/check_stain_artefacts.py`` runs the same on 18 real tiles.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 import pytest
@@ -145,9 +145,10 @@ def test_ihc_keeps_its_nuclei_with_the_dark_rule_off() -> None:
 
     The default rules are H&E's: IHC hematoxylin reads as ink over tissue (OD_G < OD_R)
     and dense DAB + hematoxylin is near-neutral (the dark rule's); when the nuclei touch,
-    the hysteresis carries the dark flags through all of them (this field: none kept by
-    default; 26-64 % of three of DeepLIIF's Ki67 tiles dropped,
-    benchmarks/results/stain-fresh-2026-11-30e.md). With the dark rule off every nucleus
+    the hysteresis carried the dark flags through all of them (this field: none kept by
+    default before the hysteresis needed 2 % flags in a region; 26-64 % of three of
+    DeepLIIF's Ki67 tiles dropped, benchmarks/results/stain-fresh-2026-11-30e.md; see
+    test_ihc_hematoxylin_is_not_ink_by_default). With the dark rule off every nucleus
     stays and the stain vectors are every pixel's; nuclei 2 pixels apart keep 90 % by
     default.
     """
@@ -159,6 +160,29 @@ def test_ihc_keeps_its_nuclei_with_the_dark_rule_off() -> None:
     assert _worst(macenko_stains(img, mask=no_dark).stain_matrix, everything) < 0.5
     apart = _ihc_tile(step=16)
     assert tissue_mask(apart)[tissue_mask(apart, pen=False, dark=False)].mean() > 0.85
+
+
+def test_ihc_hematoxylin_is_not_ink_by_default() -> None:
+    """The hysteresis grows only into regions where ink flags are >= 2 %: on the Ki67-like
+    field the default mask drops the dense DAB nuclei (the dark rule's, 1 in 10) and keeps
+    the rest (measured 90.1-91.9 % of the tissue over three seeds; was 0 %)."""
+    for seed in (0, 1):
+        img = _ihc_tile(seed=seed)
+        assert tissue_mask(img)[tissue_mask(img, pen=False, dark=False)].mean() > 0.88
+
+
+def test_hysteresis_needs_a_share_of_ink_flags() -> None:
+    """A 40 x 40 region of ink-over-tissue colour (OD_G 0.7 OD_R) touching a 2 x 2 patch of
+    green ink flags (0.25 %) stays; touching a 10 x 10 patch (6 %) it goes (the share: 2 %)."""
+    ink = np.array([0.9, 0.25, 0.3])  # OD: green ink, OD_G < 0.5 OD_R
+    weak = np.array([0.5, 0.35, 0.3])  # OD_G 0.7 OD_R: IHC hematoxylin, ink over tissue
+    for side, kept in ((2, True), (10, False)):
+        od = np.full((64, 64, 3), 0.05)
+        od[10:50, 10:50] = weak
+        od[10 : 10 + side, 10 : 10 + side] = ink
+        keep = tissue_mask(0.94 * np.exp(-od), i0=0.94, dark=False)
+        assert bool(keep[30:50, 30:50].all()) is kept
+        assert not keep[10 : 10 + side, 10 : 10 + side].any()
 
 
 @pytest.mark.parametrize("ink", ["green", "black"])
@@ -190,15 +214,21 @@ def test_clean_tiles_keep_their_tissue_and_stains(name: str) -> None:
     img = _read(name)
     glass_rule = tissue_mask(img, pen=False, dark=False)
     assert tissue_mask(img)[glass_rule].mean() >= 0.98
-    # Vahadane factorises an evenly strided subsample: a few pixels fewer move it by more
-    methods: tuple[tuple[Literal["macenko", "vahadane"], float], ...] = (
-        ("macenko", 0.5),
-        ("vahadane", 3.0),
-    )
-    for method, tol in methods:
-        auto = macenko_stains(img, method=method).stain_matrix
-        none = macenko_stains(img, method=method, mask=None).stain_matrix
-        assert _worst(auto, none) < tol
+    auto = macenko_stains(img).stain_matrix
+    assert _worst(auto, macenko_stains(img, mask=None).stain_matrix) < 0.5
+    # Vahadane, converged, every tissue pixel factorised: on the torchstain crop the default
+    # mask drops 28 pixels (0.04 % of the tissue) and its optimum moves 6.59 deg
+    # (check_stain_fresh.py --vahadane); SPAMS' trainDL (StainTools' engine: lambda 0.1,
+    # posAlpha, posD, 3000 rounds) on the same pixels: 6.87 deg. The 3 deg this test allowed
+    # before held by chance (200 unconverged rounds on a stride of the tissue pixels). The
+    # colon crop loses no pixel.
+    every = {"max_pixels": 10**6}
+    auto = vahadane_stains(img, **every).stain_matrix
+    moved = _worst(auto, vahadane_stains(img, mask=None, **every).stain_matrix)
+    if name == "torchstain_target_crop.png":
+        assert 5.9 < moved < 7.6  # the peer's 6.87 +- 0.7 (ours and SPAMS' differ up to 1.07)
+    else:
+        assert moved < 1e-6
 
 
 def test_glass_rule_is_the_od_norm() -> None:
@@ -330,3 +360,86 @@ def test_stain_normalize_mask_option(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert main([*argv, "--mask", str(tmp_path / "small.png")]) == 1
     assert "expected a mask of the image's size 256 x 256, got 8 x 8" in capsys.readouterr().err
     assert main([*argv, "--mask", str(tmp_path / "missing.png")]) != 0
+
+
+def _tissue_od(img: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """OD (I0 240) of a crop's pixels, the positions of its tissue, Macenko's start."""
+    from imageform.analysis import optical_density
+
+    od = optical_density(img, i0=240 / 255).reshape(-1, 3)
+    where = np.flatnonzero((od * od).sum(axis=1) >= 0.15**2)
+    return od, where, np.maximum(macenko_stains(img, i0=240 / 255).stain_matrix, 0.0)
+
+
+def _unit(h: np.ndarray) -> np.ndarray:
+    h = h / np.linalg.norm(h, axis=1, keepdims=True)
+    return h[::-1] if h[0, 0] < h[1, 0] else h
+
+
+@pytest.mark.parametrize("name", ["torchstain_target_crop.png", "tiatoolbox_colon_crop.png"])
+def test_vahadane_is_converged_and_does_not_move_with_one_pixel(name: str) -> None:
+    """Converged: ten times the rounds change nothing; a fixed lattice: one pixel left out
+    of the mask (one of the factorised pixels) moves the vectors < 0.1 deg (measured
+    0.0004-0.0009; 1.3 deg with the stride over the tissue pixels and 200 rounds)."""
+    from imageform.analysis._sparse_nmf import lattice_rows
+
+    img = _read(name)
+    est = vahadane_stains(img, mask=None).stain_matrix
+    assert _worst(vahadane_stains(img, mask=None, iterations=10_000).stain_matrix, est) < 0.01
+    _, where, _ = _tissue_od(img)
+    mask = np.ones(img.shape[:2], dtype=bool)
+    mask.reshape(-1)[where[lattice_rows(where, 20_000)[0]]] = False
+    assert _worst(vahadane_stains(img, mask=mask).stain_matrix, est) < 0.1
+
+
+def test_vahadane_lattices_of_two_seeds_agree() -> None:
+    """Three lattices (seeds) of 20 000 of the colon crop's 39 200 tissue pixels (I0 240):
+    < 0.5 deg (measured 0.13 at worst). Not on the torchstain crop: there they differ up to
+    5.45 deg (and the 28 pixels the mask drops move the optimum 6.59 deg, above): its
+    objective is flat."""
+    from imageform.analysis._sparse_nmf import lattice_rows, sparse_nmf
+
+    od, where, start = _tissue_od(_read("tiatoolbox_colon_crop.png"))
+    fits = [
+        _unit(sparse_nmf(od[where[lattice_rows(where, 20_000, seed)]], start, 0.1, 1000)[1])
+        for seed in (0, 1, 2)
+    ]
+    assert max(_worst(fits[0], f) for f in fits[1:]) < 0.5
+
+
+def test_vahadane_matches_spams() -> None:
+    """SPAMS' trainDL as StainTools calls it (K 2, lambda 0.1, mode 2, posAlpha, posD), run
+    3000 rounds on the same pixels: within 0.5 deg (measured 0.01 on the colon crop; 1.07
+    on the torchstain crop, every pixel, where SPAMS' objective is 0.000002 higher)."""
+    spams = pytest.importorskip("spams")
+    from imageform.analysis._sparse_nmf import lattice_rows, sparse_nmf
+
+    od, where, start = _tissue_od(_read("tiatoolbox_colon_crop.png"))
+    x = od[where[lattice_rows(where, 20_000)]]
+    ours = _unit(sparse_nmf(x, start, 0.1, 1000)[1])
+    theirs = spams.trainDL(
+        np.asfortranarray(x.T),
+        K=2,
+        lambda1=0.1,
+        mode=2,
+        modeD=0,
+        posAlpha=True,
+        posD=True,
+        verbose=False,
+        numThreads=1,
+        iter=3000,
+        batchsize=512,
+    )
+    assert _worst(ours, _unit(np.asarray(theirs).T)) < 0.5
+
+
+def test_lattice_rows_keeps_the_smallest_keys() -> None:
+    from imageform.analysis._sparse_nmf import lattice_rows
+
+    where = np.arange(0, 3000, 3)
+    assert lattice_rows(where, 5000).tolist() == list(range(1000))
+    picked = lattice_rows(where, 100)
+    assert picked.shape == (100,) and np.all(np.diff(picked) > 0)
+    fewer = np.delete(where, picked[0])  # one of the picked pixels left out
+    again = fewer[lattice_rows(fewer, 100)]
+    assert len(set(where[picked].tolist()) & set(again.tolist())) == 99
