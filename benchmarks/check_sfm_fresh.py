@@ -77,7 +77,9 @@ without ``--camera`` (the frames are PNGs: no EXIF); pycolmap from COLMAP's defa
 unknown camera (``SIMPLE_RADIAL`` from the same f, its focal length and k1 refined;
 ``autok-pycolmap.json``); for an endoscope its fisheye self-calibration above. The focal
 length found against the truth (Middlebury's calibration) or, where there is none, against
-pycolmap's; the poses as above; seconds wall (CPU for the library).
+pycolmap's; the poses as above; seconds wall (CPU for the library). With a given K,
+also ``imageform reconstruct --camera`` (its check of K in the note); under the table
+every ``note:`` line the command printed.
 Run::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_sfm_fresh.py \\
@@ -87,7 +89,12 @@ Run::
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_sfm_fresh.py \\
         --data /tmp/sfmfresh/data --split held-out
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_sfm_fresh.py \\
-        --data /tmp/sfmfresh/data --autok
+        --data /tmp/sfmfresh/data --autok [--split held-out]
+    OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_sfm_fresh.py \\
+        --data /tmp/sfmfresh/data --exif /work/.mirror
+
+``--exif MIRRORS`` (``--autok`` on Sceaux's original JPEGs, held-out): the EXIF focal length
+(:func:`imageform.io.exif_camera`) as the command finds it, against K.txt and pycolmap.
 """
 
 from __future__ import annotations
@@ -512,11 +519,18 @@ def run_imageform(
     return out
 
 
-def run_cli(folder: Path, endoscope: bool, camera: bool = True) -> dict[str, Any]:
+#: Every ``note:`` line ``imageform reconstruct`` printed (``--autok``): (run, line).
+CLI_NOTES: list[tuple[str, str]] = []
+
+
+def run_cli(
+    folder: Path, endoscope: bool, camera: bool = True, intrinsics: bool = False
+) -> dict[str, Any]:
     """``python -m imageform reconstruct`` on the frames folder; its metrics.json.
 
     ``camera`` False: without ``--camera`` (K from the frames, its focal length refined);
-    then its poses (cameras.csv) and focal lengths too.
+    then, or with ``intrinsics``, its poses (cameras.csv) and focal lengths too (with
+    ``--camera``, the given K's check in the note). Its ``note:`` lines go to ``CLI_NOTES``.
     """
     with tempfile.TemporaryDirectory() as tmp:
         cmd = [sys.executable, "-m", "imageform", "reconstruct", str(folder / "frames")]
@@ -528,6 +542,9 @@ def run_cli(folder: Path, endoscope: bool, camera: bool = True) -> dict[str, Any
         t0 = time.perf_counter()
         p = subprocess.run(cmd, capture_output=True, text=True, env=os.environ.copy())
         dt = time.perf_counter() - t0
+        run = f"{folder.name}, {'--camera' if camera else 'no --camera'}"
+        said = [ln.strip().removeprefix("imageform: ") for ln in p.stderr.splitlines()]
+        CLI_NOTES.extend((run, ln) for ln in said if ln.startswith("note:"))
         if p.returncode != 0:
             lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
             return {"reg": 0, "time": dt, "note": (lines[-1] if lines else "?")[:200]}
@@ -540,7 +557,7 @@ def run_cli(folder: Path, endoscope: bool, camera: bool = True) -> dict[str, Any
             "time": dt,
             "note": "",
         }
-        if not camera:
+        if not camera or intrinsics:
             import csv
 
             from imageform.geometry import rvec_to_matrix
@@ -554,6 +571,11 @@ def run_cli(folder: Path, endoscope: bool, camera: bool = True) -> dict[str, Any
                     t[i] = [float(r[k]) for k in ("tx", "ty", "tz")]
             intr = m["intrinsics"]
             out |= {"R": R, "t": t, "f0": intr["focal_px_initial"], "f": intr["focal_px"]}
+            if intr.get("focal_px_fit") is not None:  # K held: the check's focal length
+                flag = any("fits the frames poorly" in note for note in m["notes"])
+                out["note"] = f"check: f {intr['focal_px_fit']:.1f} px" + (
+                    ", flagged" if flag else ""
+                )
     return out
 
 
@@ -770,6 +792,10 @@ def autok_table(name: str, data: Path) -> tuple[str, list[list[Any]]]:
             ("imageform library, given f refined", run_imageform(frames, given, endo, True))
         )
     pinhole = Camera(np.array([[guess, 0, (w - 1) / 2], [0, guess, (h - 1) / 2], [0, 0, 1]]))
+    if not endo:  # the command with the given K: its check of K
+        runs.append(
+            ("imageform CLI, --camera (K held)", run_cli(folder, endo, True, intrinsics=True))
+        )
     runs.append(("imageform library, no camera", run_imageform(frames, pinhole, endo, True)))
     runs.append(("imageform CLI, no --camera", run_cli(folder, endo, camera=False)))
     cached = folder / "autok-pycolmap.json"
@@ -829,6 +855,92 @@ def autok_table(name: str, data: Path) -> tuple[str, list[list[Any]]]:
     return info, rows
 
 
+def exif_table(mirrors: Path, data: Path) -> tuple[str, list[list[Any]]]:
+    """Sceaux's original JPEGs, their EXIF kept (``--exif MIRRORS``): the EXIF focal length.
+
+    The 11 photographs as the repository holds them (2832 x 2128, their SHA-256 checked
+    against the frozen list), copied byte for byte to ``DATA/sceaux-exif/frames``: the CLI
+    without ``--camera`` (f from the EXIF 35 mm equivalent, refined), the CLI with
+    ``--camera`` K.txt (K held: its check), pycolmap from the EXIF focal length
+    (``SIMPLE_RADIAL``, its focal length and k1 refined; ``autok-pycolmap.json``). The
+    focal lengths against K.txt (openMVG's calibration); the poses against pycolmap's.
+    """
+    from imageform.geometry import Camera
+    from imageform.io import exif_camera, write_camera
+
+    s = SEQUENCES["sceaux"]
+    src = _sources("sceaux", mirrors)
+    folder = data / "sceaux-exif"
+    (folder / "frames").mkdir(parents=True, exist_ok=True)
+    keys = sorted(k for k in src if k.lower().endswith(".jpg"))
+    for k in keys:
+        if hashlib.sha256(src[k]).hexdigest() != HELD_OUT_SHA256[f"{s['repo']}:{k}"]:
+            raise SystemExit(f"{k}: differs from the frozen SHA-256 list")
+        (folder / "frames" / Path(k).name).write_bytes(src[k])
+    frames = [_decode(src[k]) for k in keys]
+    n = len(frames)
+    h, w = frames[0].shape[:2]
+    K = np.array(src["images/K.txt"].decode().split(), float).reshape(3, 3)
+    write_camera(folder / "camera.toml", Camera(K, image_size=(w, h)))
+    exif = exif_camera(folder / "frames" / Path(keys[0]).name)
+    f_exif = exif.focal_length_px
+    if f_exif is None:
+        raise SystemExit("the Sceaux JPEGs carry no EXIF focal length")
+    print(f"  sceaux-exif: {n} frames {w} x {h}, EXIF f {f_exif:.1f} px", file=sys.stderr)
+    runs: list[tuple[str, dict[str, Any]]] = []
+    runs.append(("imageform CLI, no --camera (EXIF)", run_cli(folder, False, camera=False)))
+    runs.append(
+        ("imageform CLI, --camera K.txt (K held)", run_cli(folder, False, True, intrinsics=True))
+    )
+    cached = folder / "autok-pycolmap.json"
+    if cached.exists():
+        pc = json.loads(cached.read_text())
+        pc["R"], pc["t"] = np.array(pc["R"], float), np.array(pc["t"], float)
+    else:
+        start = ("SIMPLE_RADIAL", (f_exif, w / 2, h / 2, 0.0))
+        pc = run_pycolmap(frames, None, False, True, start)
+        keep = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in pc.items()}
+        cached.write_text(json.dumps(keep))
+    pc["f0"] = f_exif
+    if "camera" in pc:
+        pc["f"] = pc["camera"][0]
+        pc["note"] = (pc.get("note", "") + f" k1 {pc['camera'][3]:.3f}").strip()
+    runs.append(("pycolmap, from the EXIF f (SIMPLE_RADIAL)", pc))
+    f_ref = float(K[0, 0])
+    rows = []
+    for label, r in runs:
+        ok = r["reg"] > 0 and "points" in r
+        if ok and "R" in r and r is not pc and pc["reg"] > 0:
+            rot, tra, rms = agreement(r["R"], r["t"], pc["R"], pc["t"])
+            vs = f"{rot:.2f} / {tra:.2f} / {rms:.2f}"
+        else:
+            vs = "reference" if ok and r is pc else "-"
+        f = r.get("f")
+        pcf = pc.get("f")
+        vs_pc = f" ({100 * (f / pcf - 1):+.1f} % vs pycolmap)" if f and pcf and r is not pc else ""
+        rows.append(
+            [
+                "sceaux-exif",
+                label,
+                f"{r['f0']:.1f}" if r.get("f0") else "-",
+                f"{f:.1f}" if f is not None else "-",
+                (f"{100 * (f / f_ref - 1):+.1f} %" + vs_pc) if f is not None else "-",
+                f"{r['reg']}/{n}",
+                f"{r['reproj']:.2f}" if ok else "-",
+                vs,
+                f"{r['time']:.1f}",
+                r.get("note", ""),
+            ]
+        )
+    info = (
+        f"sceaux-exif ({s['repo']}, the original JPEGs with their EXIF: {exif.model}, "
+        f"{exif.focal_length_mm:g} mm, 35 mm equivalent {exif.equivalent_focal_length_mm:g} mm): "
+        f"{n} frames, {w} x {h} px, EXIF f {f_exif:.1f} px; f against K.txt "
+        f"({f_ref:.1f} px), poses against pycolmap, from the EXIF f"
+    )
+    return info, rows
+
+
 AUTOK_COLUMNS = [
     "sequence",
     "run",
@@ -867,6 +979,13 @@ def main() -> None:
         action="store_true",
         help="without a camera file: the focal lengths found (imageform, pycolmap)",
     )
+    ap.add_argument(
+        "--exif",
+        type=Path,
+        default=None,
+        metavar="MIRRORS",
+        help="with --autok: Sceaux's original JPEGs and their EXIF, from the bare git mirrors",
+    )
     args = ap.parse_args()
     if args.prepare is not None:
         for name in args.only or SEQUENCES:
@@ -878,6 +997,8 @@ def main() -> None:
             print(f"    {key!r}: {h!r},")
         return
     names = [k for k, s in SEQUENCES.items() if s["split"] == args.split]
+    if args.exif is not None:  # the EXIF run alone (Sceaux: held-out)
+        args.autok, args.split, names = True, "held-out", []
     if args.only:
         names = [k for k in names if k in args.only]
     if args.split == "held-out" and HELD_OUT_SHA256:
@@ -898,8 +1019,15 @@ def main() -> None:
         info, r = (autok_table if args.autok else sequence_table)(name, args.data)
         infos.append(f"- {info}")
         rows += r
+    if args.exif is not None:
+        info, r = exif_table(args.exif, args.data)
+        infos.append(f"- {info}")
+        rows += r
     print("\n".join(infos) + "\n")
     print(markdown_table(AUTOK_COLUMNS if args.autok else COLUMNS, rows))
+    if args.autok:
+        print("\nEvery note line `imageform reconstruct` printed:\n")
+        print("\n".join(f"- {run}: `{line}`" for run, line in CLI_NOTES) or "- none")
 
 
 if __name__ == "__main__":
