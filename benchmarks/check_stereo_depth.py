@@ -1,19 +1,20 @@
 """Depth from a stereo pair: imageform's semi-global matching against truth and OpenCV's StereoSGBM.
 
-``imageform.geometry.stereo_disparity`` (census costs, 8 paths, its defaults: 5 x 5 census,
-``p1 = 8``, ``p2 = 32``, uniqueness 0.1, left-right check 1 px, the equiangular sub-pixel fit;
-also with ``subpixel="parabola"``, OpenCV's fit and imageform's before, and with
-``adaptive_p2``) against ``cv2.StereoSGBM_create`` at matched settings: the same block size
-(5), disparity range, uniqueness (``uniquenessRatio=10``) and left-right check
-(``disp12MaxDiff=1``), OpenCV's own recommended penalties for that block (``P1 = 8 * 5²``,
-``P2 = 32 * 5²``: its Birchfield-Tomasi costs summed over the block are on another scale than
-census bits, so the penalties cannot be the same numbers) in ``MODE_HH`` (8 paths, as ours)
-and in its default mode (5 paths). No speckle filter on either side. OpenCV's ``compute``
-also passes every map through a 3 x 3 median (``medianBlur(disp, disp, 3)`` in
-``StereoSGBMImpl::compute``; no parameter turns it off), which fills isolated invalid pixels:
-``imageform median_filter`` (``stereo_disparity(..., median_filter=True)``) is imageform with
-that median, the comparison at truly matched settings. (OpenCV's left-right check cannot be
-turned off either: ``disp12MaxDiff <= 0`` is taken as 1.)
+``imageform.geometry.stereo_disparity`` (census costs, 8 paths, its defaults: 5 x 5 graded
+census, ``census_step=4``, ``p1 = 8``, ``p2 = 32``, uniqueness 0.1, left-right check 1 px, the
+equiangular sub-pixel fit; also with ``census_step=None``, the plain census that was the default
+before 2026-11-30 (``imageform plain census (before 2026-11-30)``), with
+``subpixel="parabola"``, OpenCV's fit and imageform's before, and with ``adaptive_p2``) against
+``cv2.StereoSGBM_create`` at matched settings: the same block size (5), disparity range,
+uniqueness (``uniquenessRatio=10``) and left-right check (``disp12MaxDiff=1``), OpenCV's own
+recommended penalties for that block (``P1 = 8 * 5²``, ``P2 = 32 * 5²``: its Birchfield-Tomasi
+costs summed over the block are on another scale than census bits, so the penalties cannot be
+the same numbers) in ``MODE_HH`` (8 paths, as ours) and in its default mode (5 paths). No
+speckle filter on either side. OpenCV's ``compute`` also passes every map through a 3 x 3 median
+(``medianBlur(disp, disp, 3)`` in ``StereoSGBMImpl::compute``; no parameter turns it off), which
+fills isolated invalid pixels: ``imageform median_filter`` (``stereo_disparity(...,
+median_filter=True)``) is imageform with that median, the comparison at truly matched settings.
+(OpenCV's left-right check cannot be turned off either: ``disp12MaxDiff <= 0`` is taken as 1.)
 
 Pairs (``set``: ``tuning`` the pairs the defaults were chosen on, ``held out`` those looked at
 only once, after the choice):
@@ -63,7 +64,10 @@ printed).
 
     OPENBLAS_NUM_THREADS=1 NUMBA_NUM_THREADS=1 PYTHONPATH=src:. \\
         python benchmarks/check_stereo_depth.py --middlebury /tmp/middlebury \\
-        --middlebury-2003 /tmp/acv-testdata --out benchmarks/results/stereo-depth-2026-11-30d.md
+        --middlebury-2003 /tmp/acv-testdata --runs 9 \\
+        --out benchmarks/results/stereo-depth-2026-11-30e.md
+
+(``stereo-depth-2026-11-30d.md``, the plain census as the default, came from the same command.)
 """
 
 from __future__ import annotations
@@ -86,6 +90,8 @@ from stereo_scenes import render_pair  # noqa: E402
 from imageform.geometry import stereo_disparity  # noqa: E402
 
 BLOCK = 5
+#: the label of the plain census (``census_step=None``), the default before 2026-11-30
+PLAIN = "imageform plain census (before 2026-11-30)"
 #: the 2003 / 2001 pairs of ``--middlebury-2003``: left, right, truth, its scale, disparities
 PAIRS_2003 = {
     "teddy": ("im2.png", "im6.png", "disp2.png", 4, 64),
@@ -240,21 +246,29 @@ def _locking(d: np.ndarray, pair: dict[str, Any], bins: int = 8) -> list[float]:
     return [float(e[frac == i].mean()) for i in range(bins)]
 
 
-def _time(pair: dict[str, Any], runs: int) -> tuple[float, float, float]:
+def _time(pair: dict[str, Any], runs: int) -> tuple[float, float, float, float]:
     import cv2
 
-    ours, par, cv = [], [], []
+    ours, plain, par, cv = [], [], [], []
     for _ in range(runs):
         t = time.process_time()
         _ours(pair)
         ours.append(time.process_time() - t)
+        t = time.process_time()
+        _ours(pair, census_step=None)
+        plain.append(time.process_time() - t)
         t = time.process_time()
         _ours(pair, subpixel="parabola")
         par.append(time.process_time() - t)
         t = time.process_time()
         _opencv(pair, cv2.STEREO_SGBM_MODE_HH)
         cv.append(time.process_time() - t)
-    return float(np.median(ours)), float(np.median(par)), float(np.median(cv))
+    return (
+        float(np.median(ours)),
+        float(np.median(plain)),
+        float(np.median(par)),
+        float(np.median(cv)),
+    )
 
 
 def main() -> None:
@@ -292,8 +306,10 @@ def main() -> None:
             pairs[name] = _pair_2003(args.middlebury_2003, name)
     _ours(pairs["rendered"])  # compile the kernels before anything is timed
     _ours(pairs["rendered"], subpixel="parabola")
+    _ours(pairs["rendered"], census_step=None)
     methods = {
         "imageform": lambda p: _ours(p),
+        PLAIN: lambda p: _ours(p, census_step=None),
         "imageform parabola": lambda p: _ours(p, subpixel="parabola"),
         "imageform adaptive_p2": lambda p: _ours(p, adaptive_p2=True),
         "imageform median_filter": lambda p: _ours(p, median_filter=True),
@@ -308,10 +324,11 @@ def main() -> None:
         "",
         f"numpy {np.__version__}, OpenCV {cv2.__version__}; block 5, uniqueness 10 %, "
         "left-right check 1 px, no speckle filter; scores over the non-occluded pixels with a "
-        "truth, off the left band of num_disparities columns. imageform: the equiangular "
-        "sub-pixel fit (the default); imageform parabola: the parabola (OpenCV's fit, "
-        "imageform's before). Adirondack's truth: its PNG + 0.5 px (the PNG holds the "
-        "disparity truncated, see below).",
+        "truth, off the left band of num_disparities columns. imageform: its defaults (the "
+        "graded census, census_step 4, and the equiangular sub-pixel fit); imageform plain "
+        "census (before 2026-11-30): census_step None, the default before; imageform "
+        "parabola: the parabola (OpenCV's fit, imageform's before). Adirondack's truth: its "
+        "PNG + 0.5 px (the PNG holds the disparity truncated, see below).",
         "",
         "| pair | set | truth | size | disparities | method | density | > 1 px "
         "| > 1 px, d rounded | > 3 px | MAE px | median d - truth |",
@@ -361,7 +378,7 @@ def main() -> None:
     ]
     for name in ("rendered", "rendered-radiometric"):
         pair = pairs[name]
-        for method in ("imageform", "imageform parabola", "OpenCV SGBM MODE_HH"):
+        for method in ("imageform", PLAIN, "imageform parabola", "OpenCV SGBM MODE_HH"):
             d = results[name][method]
             t = pair["truth"]
             ok = _region(pair) & np.isfinite(d) & (np.abs(d - t) < 1)
@@ -372,7 +389,7 @@ def main() -> None:
     lines += [
         "",
         "Uniqueness: density, > 1 px and > 3 px at uniquenessRatio 5, 10 and 15 % "
-        "(imageform's `uniqueness` 0.05, 0.1, 0.15) of imageform, imageform with the 3 x 3 "
+        "(imageform's `uniqueness` 0.05, 0.1, 0.15) of imageform (its defaults), with the 3 x 3 "
         "median (median_filter) and OpenCV MODE_HH (whose compute always applies that median):",
         "",
         "| pair | set | uniqueness | imageform density | > 1 px | > 3 px "
@@ -397,17 +414,18 @@ def main() -> None:
         "CPU time of the matching alone, one thread each, median of "
         f"{args.runs} interleaved runs (load before: {_load()}):",
         "",
-        "| pair | imageform s | imageform parabola s | OpenCV MODE_HH s | imageform / parabola "
-        "| imageform / OpenCV |",
-        "|---|---:|---:|---:|---:|---:|",
+        "| pair | imageform s | plain census s | imageform parabola s | OpenCV MODE_HH s "
+        "| imageform / plain | imageform / parabola | imageform / OpenCV | plain / OpenCV |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for name in ("rendered", "adirondack", "cones"):
         if name not in pairs:
             continue
-        t_ours, t_par, t_cv = _time(pairs[name], args.runs)
+        t_ours, t_plain, t_par, t_cv = _time(pairs[name], args.runs)
         lines.append(
-            f"| {name} | {t_ours:.3f} | {t_par:.3f} | {t_cv:.3f} | {t_ours / t_par:.2f} | "
-            f"{t_ours / t_cv:.2f} |"
+            f"| {name} | {t_ours:.3f} | {t_plain:.3f} | {t_par:.3f} | {t_cv:.3f} | "
+            f"{t_ours / t_plain:.2f} | {t_ours / t_par:.2f} | {t_ours / t_cv:.2f} | "
+            f"{t_plain / t_cv:.2f} |"
         )
     lines += ["", f"load after: {_load()}"]
     text = "\n".join(lines) + "\n"

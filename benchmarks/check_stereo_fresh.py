@@ -54,9 +54,11 @@ What is measured, per board set:
   RMS and the largest ``|y_left - y_right|`` (px), the error a matcher along rows meets.
 - **Matching** on every used pair, rectified with imageform's maps (``rectification_map``,
   ``remap_bilinear``), the same images to both matchers: imageform ``stereo_disparity``
-  (its defaults, block 5), with ``median_filter=True`` (OpenCV's compute always applies
-  that 3 x 3 median) and with ``census_threshold=4`` (``THRESHOLD``: the value chosen on the
-  tuning half's endoscope pairs, where thresholds 0, 1, 2, 3, 4, 6 were tried) against
+  (its defaults, block 5: the graded census, ``census_step=4``), with ``census_step=None``
+  (the plain census, the default before 2026-11-30), with ``median_filter=True`` (OpenCV's
+  compute always applies that 3 x 3 median) and with ``census_threshold=4`` (``THRESHOLD``:
+  the value chosen on the tuning half's endoscope pairs, where thresholds 0, 1, 2, 3, 4, 6
+  were tried, with the plain census; here with the default ``census_step``) against
   ``cv2.StereoSGBM_create`` (``MODE_HH``, block 5, ``P1 = 8·25``, ``P2 = 32·25``,
   ``uniquenessRatio = 10``, ``disp12MaxDiff = 1``, no speckle filter) over
   the same disparity range (from the truth of all pairs, rounded out to 16). The truth: the
@@ -76,7 +78,9 @@ What is measured, per board set:
 
     OPENBLAS_NUM_THREADS=1 NUMBA_NUM_THREADS=1 PYTHONPATH=src:. \\
         python benchmarks/check_stereo_fresh.py /tmp/stereofresh --half all \\
-        --acv /tmp/acv-testdata --out benchmarks/results/stereo-fresh-2026-11-30e.md
+        --acv /tmp/acv-testdata --out benchmarks/results/stereo-fresh-2026-11-30f.md
+
+(``stereo-fresh-2026-11-30e.md``, the plain census as the default, came from the same command.)
 
 ``--acv`` (r09921135/acv's ``hw4/testdata/``, see ``check_stereo_depth.py``) adds the
 Middlebury tsukuba analysis: where imageform's > 1 px errors lie against OpenCV's, and the
@@ -115,6 +119,8 @@ from imageform.geometry import (  # noqa: E402
 BLOCK = 5
 #: the census threshold shown beside the defaults: chosen on the tuning half (davinci)
 THRESHOLD = 4.0
+#: the label of the plain census (``census_step=None``), the default before 2026-11-30
+PLAIN = "imageform plain census (before 2026-11-30)"
 #: name -> (half, kind, left glob, right glob, board (cols, rows), square mm or None, digest)
 SETS: dict[str, tuple[str, str, str, str, tuple[int, int], float | None, str]] = {
     "davinci": (
@@ -383,17 +389,20 @@ def _board_truth(
 
 def _time(
     pairs: list[tuple[np.ndarray, np.ndarray]], lo: int, n: int, runs: int
-) -> tuple[float, float]:
-    ours, cv = [], []
+) -> tuple[float, float, float]:
+    ours, plain, cv = [], [], []
     for _ in range(runs):
         for left, right in pairs:
             t = time.process_time()
             _ours(left, right, lo, n)
             ours.append(time.process_time() - t)
             t = time.process_time()
+            _ours(left, right, lo, n, census_step=None)
+            plain.append(time.process_time() - t)
+            t = time.process_time()
             _sgbm(left, right, lo, n)
             cv.append(time.process_time() - t)
-    return float(np.median(ours)), float(np.median(cv))
+    return float(np.median(ours)), float(np.median(plain)), float(np.median(cv))
 
 
 def _range(lo_truth: float, hi_truth: float, width: int) -> tuple[int, int]:
@@ -445,6 +454,7 @@ def _board_set(name: str, folder: Path, spec: tuple[Any, ...], runs: int) -> dic
     lo, n = _range(lo_t, hi_t, size[0])
     methods = {
         "imageform": lambda L, R: _ours(L, R, lo, n),
+        PLAIN: lambda L, R: _ours(L, R, lo, n, census_step=None),
         "imageform median_filter": lambda L, R: _ours(L, R, lo, n, median_filter=True),
         f"imageform census_threshold {THRESHOLD:g}": lambda L, R: _ours(
             L, R, lo, n, census_threshold=THRESHOLD
@@ -453,6 +463,7 @@ def _board_set(name: str, folder: Path, spec: tuple[Any, ...], runs: int) -> dic
     }
     mirrored = {
         "imageform": lambda a, b, lo_, n_: _ours(a, b, lo_, n_),
+        PLAIN: lambda a, b, lo_, n_: _ours(a, b, lo_, n_, census_step=None),
         f"imageform census_threshold {THRESHOLD:g}": lambda a, b, lo_, n_: _ours(
             a, b, lo_, n_, census_threshold=THRESHOLD
         ),
@@ -460,7 +471,7 @@ def _board_set(name: str, folder: Path, spec: tuple[Any, ...], runs: int) -> dic
     }
     scores: dict[str, list[tuple[float, ...]]] = {k: [] for k in methods}
     lr: dict[str, list[float]] = {k: [] for k in mirrored}
-    agree = []
+    agree: dict[str, list[float]] = {"imageform": [], PLAIN: []}
     for L, R, truth, region, _ in items:
         maps = {}
         for k, fn in methods.items():
@@ -469,23 +480,25 @@ def _board_set(name: str, folder: Path, spec: tuple[Any, ...], runs: int) -> dic
             scores[k].append(_score(d, truth, region))
         for k, f in mirrored.items():
             lr[k].append(_lr_share(np.where(region, maps[k], np.nan), _mirror(f, L, R, lo, n)))
-        agree.append(_agree(maps["imageform"], maps["OpenCV SGBM MODE_HH"]))
+        for k, ag in agree.items():
+            ag.append(_agree(maps[k], maps["OpenCV SGBM MODE_HH"]))
     # the command line end to end: its rig file, imageform depth on the first pair
     cli_scores = []
     if cli is not None:
-        for extra in ([], ["--census-threshold", f"{THRESHOLD:g}"]):
+        for extra in ([], ["--census-step", "0"], ["--census-threshold", f"{THRESHOLD:g}"]):
             d = _cli_depth(det["used"][0], Path(tmpdir.name) / "rig.toml", lo, n, extra)
             cli_scores.append(None if d is None else _score(d, items[0][2], items[0][3]))
     tmpdir.cleanup()
-    t_ours, t_cv = _time([(L, R) for L, R, *_ in items[:2]], lo, n, runs)
+    t_ours, t_plain, t_cv = _time([(L, R) for L, R, *_ in items[:2]], lo, n, runs)
     return {
         "cli_depth": cli_scores,
         "first": scores["imageform"][0],
+        "first_plain": scores[PLAIN][0],
         "first_thr": scores[f"imageform census_threshold {THRESHOLD:g}"][0],
         "half": half, "size": size, "pairs": len(det["used"]), "total": len(det["used"]) +
         det["skipped"], "ours": ours, "cv": cv, "angle": ang, "err_ours": err_ours,
         "err_cv": err_cv, "cli": cli, "lo": lo, "n": n, "scores": scores, "lr": lr,
-        "agree": agree, "resid": [it[4] for it in items], "time": (t_ours, t_cv),
+        "agree": agree, "resid": [it[4] for it in items], "time": (t_ours, t_plain, t_cv),
         "truth_range": (lo_t, hi_t), "square": square,
     }  # fmt: skip
 
@@ -506,6 +519,7 @@ def _scene_set(name: str, folder: Path, spec: tuple[Any, ...], runs: int) -> dic
     lo, n = 0, 64
     for (L, R), (lf, _) in zip(pairs, _pairs(folder, lg, rg), strict=True):
         d_o = _ours(L, R, lo, n)
+        d_p = _ours(L, R, lo, n, census_step=None)
         d_m = _ours(L, R, lo, n, median_filter=True)
         d_t = _ours(L, R, lo, n, census_threshold=THRESHOLD)
         d_c = _sgbm(L, R, lo, n)
@@ -515,21 +529,25 @@ def _scene_set(name: str, folder: Path, spec: tuple[Any, ...], runs: int) -> dic
         def thr(a: np.ndarray, b: np.ndarray, c: int, e: int) -> np.ndarray:
             return _ours(a, b, c, e, census_threshold=THRESHOLD)
 
+        def plain(a: np.ndarray, b: np.ndarray, c: int, e: int) -> np.ndarray:
+            return _ours(a, b, c, e, census_step=None)
+
         rows.append(
             {
                 "pair": lf.stem.replace("_left", ""),
                 "size": (L.shape[1], L.shape[0]),
-                "density": [float(np.isfinite(x)[band].mean()) for x in (d_o, d_m, d_t, d_c)],
+                "density": [float(np.isfinite(x)[band].mean()) for x in (d_o, d_p, d_m, d_t, d_c)],
                 "lr": [
                     _lr_share(d_o, _mirror(lambda a, b, c, e: _ours(a, b, c, e), L, R, lo, n)),
+                    _lr_share(d_p, _mirror(plain, L, R, lo, n)),
                     _lr_share(d_t, _mirror(thr, L, R, lo, n)),
                     _lr_share(d_c, _mirror(_sgbm, L, R, lo, n)),
                 ],
-                "agree": [_agree(d_o, d_c), _agree(d_t, d_c)],
+                "agree": [_agree(d_o, d_c), _agree(d_p, d_c), _agree(d_t, d_c)],
             }
         )
-    t_ours, t_cv = _time(pairs[:2], lo, n, runs)
-    return {"half": half, "rows": rows, "time": (t_ours, t_cv), "n": n}
+    t_ours, t_plain, t_cv = _time(pairs[:2], lo, n, runs)
+    return {"half": half, "rows": rows, "time": (t_ours, t_plain, t_cv), "n": n}
 
 
 # ------------------------------------------------------------------ tsukuba
@@ -561,6 +579,7 @@ def _tsukuba(acv: Path) -> list[str]:
     flat = sd < 3.0
     maps = {
         "imageform": stereo_disparity(p["left"], p["right"], num_disparities=16),
+        PLAIN: stereo_disparity(p["left"], p["right"], num_disparities=16, census_step=None),
         "imageform median_filter": stereo_disparity(
             p["left"], p["right"], num_disparities=16, median_filter=True
         ),
@@ -627,7 +646,10 @@ def main() -> None:
         "# The stereo chain on fresh real data: calibration, rectification, matching",
         "",
         f"numpy {np.__version__}, OpenCV {cv2.__version__}; sets: {args.half} "
-        f"(benchmarks/check_stereo_fresh.py names their sources); load before: {load0}.",
+        f"(benchmarks/check_stereo_fresh.py names their sources); load before: {load0}. "
+        "imageform: stereo_disparity's defaults (the graded census, census_step 4); "
+        f"{PLAIN}: census_step None, the default before; census_threshold "
+        f"{THRESHOLD:g}: with the default census_step.",
         "",
         "Stereo calibration on the same corners (imageform's find_checkerboard), imageform "
         "stereo_calibrate against cv2.calibrateCamera + cv2.stereoCalibrate "
@@ -689,7 +711,7 @@ def main() -> None:
         for k, sc in r["scores"].items():
             a = np.array(sc, dtype=np.float64)
             lr = f"{100 * np.nanmean(r['lr'][k]):.1f} %" if r["lr"].get(k) else ""
-            ag = f"{100 * np.nanmean(r['agree']):.1f} %" if k == "imageform" else ""
+            ag = f"{100 * np.nanmean(r['agree'][k]):.1f} %" if k in r["agree"] else ""
             lines.append(
                 f"| {name} | {k} | {100 * np.nanmean(a[:, 0]):.1f} % | "
                 f"{100 * np.nanmean(a[:, 1]):.2f} % ({100 * np.nanmax(a[:, 1]):.1f} %) | "
@@ -708,9 +730,9 @@ def main() -> None:
     ]
     for name, r in boards.items():
         for extra, sc, ref in zip(
-            ("defaults", f"--census-threshold {THRESHOLD:g}"),
+            ("defaults", "--census-step 0", f"--census-threshold {THRESHOLD:g}"),
             r["cli_depth"],
-            (r["first"], r["first_thr"]),
+            (r["first"], r["first_plain"], r["first_thr"]),
             strict=False,
         ):
             cells = (
@@ -727,13 +749,14 @@ def main() -> None:
         lines += [
             "",
             "Real pairs without a truth (64 disparities, right of the invalid band): density "
-            f"of imageform, with median_filter, with census_threshold {THRESHOLD:g} and of "
-            "OpenCV; left-right consistent shares; agreement with OpenCV (within 1 px):",
+            "of imageform (its defaults), the plain census (before 2026-11-30), with "
+            f"median_filter, with census_threshold {THRESHOLD:g} and of OpenCV; left-right "
+            "consistent shares; agreement with OpenCV (within 1 px):",
             "",
-            "| set | pair | size | density imageform | median | threshold | OpenCV "
-            "| left-right consistent imageform | threshold | OpenCV | agreement imageform "
-            "| threshold |",
-            "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+            "| set | pair | size | density imageform | plain | median | threshold | OpenCV "
+            "| left-right consistent imageform | plain | threshold | OpenCV "
+            "| agreement imageform | plain | threshold |",
+            "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
         ]
         for name, r in scenes.items():
             for row in r["rows"]:
@@ -748,12 +771,16 @@ def main() -> None:
         f"CPU time of the matching alone, one thread each, median of {args.runs} interleaved "
         "runs on the first two pairs of each set:",
         "",
-        "| set | disparities | imageform s | OpenCV MODE_HH s | imageform / OpenCV |",
-        "|---|---:|---:|---:|---:|",
+        "| set | disparities | imageform s | plain census s | OpenCV MODE_HH s "
+        "| imageform / plain | imageform / OpenCV | plain / OpenCV |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for name, r in results.items():
-        to, tc = r["time"]
-        lines.append(f"| {name} | {r['n']} | {to:.3f} | {tc:.3f} | {to / tc:.2f} |")
+        to, tp, tc = r["time"]
+        lines.append(
+            f"| {name} | {r['n']} | {to:.3f} | {tp:.3f} | {tc:.3f} | {to / tp:.2f} | "
+            f"{to / tc:.2f} | {tp / tc:.2f} |"
+        )
     if args.acv is not None:
         lines += [
             "",
