@@ -40,6 +40,10 @@ ILLUMINANTS = (
             f"unknown --illuminant 'Q'; valid: an illuminant or RGB space name ({ILLUMINANTS})",
         ),
         (["--method", "white-patch", "--percentile", "150"], "expected --percentile <= 100"),
+        (
+            ["--method", "pca", "--percentile", "80"],
+            "expected --percentile in (0, 50] for --method pca",
+        ),
     ],
 )
 @pytest.mark.parametrize("how", ["single", "batch", "chunked"])

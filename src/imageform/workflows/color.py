@@ -431,7 +431,13 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
             _check_illuminant(self.illuminant)
         if self.chart is not None:
             object.__setattr__(self, "chart", Path(self.chart))
-        if normalize_choice(self.method, _WB_METHODS, "--method") != "chart":
+        method = normalize_choice(self.method, _WB_METHODS, "--method")
+        if method == "pca" and self.percentile is not None and not 0 < self.percentile <= 50:
+            raise InvalidInputError(  # the library's rule, named by the flag before the read
+                f"expected --percentile in (0, 50] for --method pca (the share of darkest and "
+                f"of brightest pixels; default 3.5), got {self.percentile:g}"
+            )
+        if method != "chart":
             used = [f for f, v in (("--chart", self.chart), ("--overlay", self.overlay)) if v]
             if used:
                 raise InvalidInputError(f"{', '.join(used)} go(es) with --method chart only")
