@@ -77,7 +77,7 @@ def test_rails_under_strong_barrel_distortion() -> None:
     on the built-in scene at 640 x 360: the rails are curves, so the simulator detects on the
     image undistorted with the camera's own model. Detected on the distorted image, the
     point was 5.2-7.8 px off for seeds 0-3 (and 2400-3800 px at 640 x 480 through the
-    twin of that camera, docs/characterize.md); undistorted 0.42-0.54 px."""
+    twin of that camera, docs/characterize.md); undistorted first, 0.40-0.51 px."""
     from importlib.resources import files
 
     text = files("imageform.simulate").joinpath("scenes/default.toml").read_text()

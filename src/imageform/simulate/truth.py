@@ -389,11 +389,12 @@ def detect_vanishing(
     same K), as ``imageform vanishing --camera`` does: a distorted image's rails are curves,
     which no straight-line detector fits reliably (a calibrated webcam's k1 = -0.29 put the
     detection 2400-3800 px off for some noise draws; undistorted, 0.2-0.5 px). The segments
-    are LSD's (:func:`imageform.geometry.detect_line_segments`' default). The point is
-    then compared with the pinhole truth, in the undistorted image's pixels
-    (``vanishing_point_error_px``), and reported mapped back through the distortion (where
-    the model is invertible there; else the undistorted point) next to the distorted truth.
-    The horizon is a pinhole line either way.
+    are LSD's (:func:`imageform.geometry.detect_line_segments`' default). The point nearest
+    the pinhole truth is mapped back through the distortion and compared with the distorted
+    truth in the image's pixels (``vanishing_point_error_px``; errors through a lens are
+    measured in the image, docs/design.md); where the model does not map it back one to one,
+    the undistorted point is reported with its distance to the pinhole truth. The horizon is
+    a pinhole line either way.
 
     ``rng`` seeds the detector's RANSAC (an int seed, a Generator to draw the seed from, or
     None); ``seed`` is its deprecated name.
@@ -447,8 +448,9 @@ def detect_vanishing(
         return filled, vanishing_errors(filled)
     shown = _distort_point(vp, K, distortion)
     filled = VanishingTruth(truth.vanishing_point, truth.horizon, shown, horizon)
-    errors = vanishing_errors(filled)
-    errors["vanishing_point_error_px"] = dist[best]
+    errors = vanishing_errors(filled)  # in the image's pixels, beside the distorted truth
+    if shown is vp:  # not mapped back (beyond the model's one-to-one range): pinhole pixels
+        errors["vanishing_point_error_px"] = dist[best]
     return filled, errors
 
 
