@@ -140,7 +140,7 @@ def _linear(img: Any, transfer: str) -> Any:
     return np.asarray(srgb_to_linear(vals)) if transfer == "srgb" else vals
 
 
-def _detector_data(image: Path, img: Any) -> bool:
+def _detector_data(image: Path, fmt: str, img: Any) -> bool:
     """Whether ``--transfer auto`` takes ``img`` as a detector's linear values.
 
     A single-channel TIFF of 16 bits or more that declares no colour space (no ICC profile,
@@ -152,12 +152,12 @@ def _detector_data(image: Path, img: Any) -> bool:
     """
     import numpy as np
 
-    from imageform.io import image_color_space, image_info
+    from imageform.io import image_color_space
 
     grey = img.ndim == 2 or img.shape[-1] == 1
     if not grey or img.dtype.kind not in "ui" or np.dtype(img.dtype).itemsize < 2:
         return False
-    if image_info(image).format != "tiff":
+    if fmt != "tiff":
         return False
     return image_color_space(image).source == "none"
 
@@ -181,13 +181,14 @@ def _edge_image(
     pitch = None if given is None else _Pitch(given, given, "--pixel-pitch")
     if image.suffix.lower() not in _RAW_SUFFIXES:
         img = read(image, opts)  # reads (and refuses) first: a missing file, a bad DICOM
-        dicom = image_info(image).format == "dicom"
+        fmt = image_info(image).format
+        dicom = fmt == "dicom"
         if dicom and pitch is None:
             pitch = _dicom_pitch(image)
         transfer = opts.transfer
         if transfer == "auto":
             transfer = "linear" if dicom else "srgb"
-            if not dicom and _detector_data(image, img):
+            if not dicom and _detector_data(image, fmt, img):
                 transfer = "linear"
                 run.note(
                     f"note: {image.name} is a 16-bit grey TIFF that declares no colour space: "
