@@ -103,3 +103,31 @@ def test_the_options_bounds_are_the_library_s() -> None:
 @pytest.mark.parametrize("name", ["D50", "d65", "F11", "display-p3", "ProPhoto"])
 def test_every_listed_illuminant_is_taken(name: str) -> None:
     assert WhiteBalanceOptions(method="manual", illuminant=name).illuminant == name
+
+
+def test_chunked_help_names_only_what_it_streams(capsys: pytest.CaptureFixture[str]) -> None:
+    """``chunked white-balance --p`` is shades-of-gray's alone (gray-edge is not streamed)."""
+    assert main(["chunked", "white-balance", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "--p FLOAT shades-of-gray: Minkowski norm p" in text
+    assert "gray-edge" not in text
+
+
+@pytest.mark.parametrize("how", ["single", "chunked"])
+def test_a_white_outside_the_gamut_is_said(
+    how: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """1666.67 K is Robertson's lowest white but lies outside sRGB: one line says so and where
+    sRGB's whites begin (it said the image's estimate had an empty channel)."""
+    import tifffile
+
+    src = tmp_path / "in.tif"
+    tifffile.imwrite(src, np.full((8, 8, 3), 128, np.uint8), photometric="rgb")
+    out = tmp_path / "o.tif"
+    head = ["chunked"] if how == "chunked" else []
+    args = [*head, "white-balance", str(src), "-o", str(out), "--method", "manual"]
+    assert main([*args, "--cct", "1666.67"]) == 1
+    (line,) = capsys.readouterr().err.splitlines()
+    assert "1666.67 K lies outside srgb's gamut" in line and "from 1900 K" in line, line
+    assert not out.exists()
+    assert main([*args, "--cct", "1900"]) == 0

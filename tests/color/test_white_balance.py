@@ -160,11 +160,30 @@ def test_bad_inputs() -> None:
         white_balance(img, "manual", cct=1000.0)
     with pytest.raises(InvalidInputError, match="exactly one of"):
         white_balance(img, "manual")
+    # a Planckian white outside sRGB's gamut: said so, with where sRGB's whites begin
+    with pytest.raises(InvalidInputError, match=r"1700 K lies outside srgb's gamut .* 1900 K"):
+        white_balance(img, "manual", cct=1700.0)
     with pytest.raises(DegenerateConfigurationError, match="zero"):
         white_balance(np.full((5, 5, 3), 0.5) * np.array([1.0, 1.0, 0.0]))
     with pytest.raises(UnknownOptionError, match="gain normalisation"):
         white_balance(img, normalize="max")
     assert set(ESTIMATORS) < set(WHITE_BALANCE_METHODS)
+
+
+def test_manual_white_at_the_edge_of_the_gamut() -> None:
+    """The lowest CCT the error names is where the space's blue turns positive."""
+    from imageform.color.cct import cct_to_xy
+    from imageform.color.white_balance import xy_to_xyz_white, xyz_to_linear_rgb
+
+    def blue(t: float) -> float:
+        return float(xyz_to_linear_rgb(xy_to_xyz_white(list(cct_to_xy(t))), "srgb")[2])
+
+    assert blue(1899.0) < 0.0 < blue(1900.0)
+    img = np.full((4, 4, 3), 0.5)
+    gains = white_balance(img, "manual", cct=1900.0, transfer="linear").gains
+    assert np.all(np.isfinite(gains)) and np.all(gains > 0)
+    # a wider space holds the lowest whites Robertson's method gives
+    assert np.all(white_balance(img, "manual", cct=1667.0, space="rec2020").gains > 0)
 
 
 def test_dask_gray_world_is_a_global_reduction() -> None:

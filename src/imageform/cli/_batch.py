@@ -26,7 +26,7 @@ from imageform.cli._build import (
 )
 from imageform.errors import ImageformError
 from imageform.workflows import Workflow, normalize_choice
-from imageform.workflows.color import CHUNKED_CHOICES, CHUNKED_OPTIONS
+from imageform.workflows.color import CHUNKED_CHOICES, CHUNKED_HELP, CHUNKED_OPTIONS
 
 __all__ = ["batch_group", "chunked_group"]
 
@@ -183,8 +183,16 @@ def _narrowed(wf: Workflow, param: click.Parameter, choices: tuple[str, ...]) ->
     return param
 
 
+def _reworded(param: click.Parameter, words: Mapping[str, str]) -> click.Parameter:
+    """Return ``param`` with the help ``chunked`` gives it, where its narrower choices differ."""
+    if isinstance(param, click.Option) and param.name in words:
+        param.help = words[param.name]
+    return param
+
+
 def _chunked_command(wf: Workflow) -> click.Command:
     narrow: Mapping[str, tuple[str, ...]] = CHUNKED_CHOICES.get(wf.name.replace("-", "_"), {})
+    words: Mapping[str, str] = CHUNKED_HELP.get(wf.name.replace("-", "_"), {})
     params: list[click.Parameter] = [
         click.Argument(["image"], type=click.Path(path_type=Path), metavar="IMAGE"),
         click.Option(
@@ -195,7 +203,7 @@ def _chunked_command(wf: Workflow) -> click.Command:
         ),
         # only what chunked honours (--alpha, --max-pixels ... were listed and ignored)
         *[
-            _narrowed(wf, p, narrow[p.name]) if p.name in narrow else p
+            _reworded(_narrowed(wf, p, narrow[p.name]) if p.name in narrow else p, words)
             for p in option_params(wf)
             if p.name in CHUNKED_OPTIONS[wf.name.replace("-", "_")]
         ],

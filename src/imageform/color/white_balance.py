@@ -265,10 +265,44 @@ def _manual(xp: Any, like: Any, illuminant: Any, cct: float | None, space: str) 
         xyz = xy_to_xyz_white([float(v) for v in cct_to_xy(float(cct))])
     else:
         xyz = resolve_white(illuminant, name="illuminant")
-    rgb = xyz_to_linear_rgb(xyz, space)
+    rgb = np.asarray([float(v) for v in xyz_to_linear_rgb(xyz, space)], dtype=np.float64)
+    if not np.all(rgb > 0):
+        raise InvalidInputError(_outside_gamut(rgb, cct, illuminant, space))
     # a constant: uploaded once per device and dtype (no copy, no stream sync per call)
-    e = constant(np.asarray([float(v) for v in rgb], dtype=np.float64), like, xp)
+    e = constant(rgb, like, xp)
     return xp.broadcast_to(e, (*tuple(like.shape[:-3]), 3))
+
+
+def _outside_gamut(rgb: np.ndarray, cct: float | None, illuminant: Any, space: str) -> str:
+    """Say that a manual white lies outside ``space``'s gamut, and where its whites begin.
+
+    A Planckian white below about 1900 K has a negative blue in linear sRGB (its chromaticity
+    lies outside the triangle of sRGB's primaries), so no positive gain maps it to grey.
+    """
+    from imageform.color.cct import cct_to_xy
+
+    names = ("red", "green", "blue")
+    bad = " and ".join(names[i] for i in range(3) if not rgb[i] > 0)
+    what = f"the Planckian white of {cct:g} K" if cct is not None else "the illuminant"
+    verb = "are" if " and " in bad else "is"
+    msg = (
+        f"{what} lies outside {space}'s gamut (its {bad} {verb} not positive in linear "
+        f"{space}): no gain balances it"
+    )
+    if cct is None:
+        return msg
+
+    def inside(t: float) -> bool:
+        xyz = xy_to_xyz_white([float(v) for v in cct_to_xy(t)])
+        return bool(np.all(np.asarray(xyz_to_linear_rgb(xyz, space), dtype=np.float64) > 0))
+
+    lo, hi = float(cct), 25000.0
+    if not inside(hi):
+        return msg
+    for _ in range(40):  # bisection on the locus: the lowest CCT whose white the space holds
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if inside(mid) else (mid, hi)
+    return f"{msg}; {space} holds the Planckian whites from {np.ceil(hi):.0f} K"
 
 
 def _check_estimate(e: np.ndarray, why: str = "an empty channel?") -> np.ndarray:

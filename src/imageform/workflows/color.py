@@ -41,6 +41,7 @@ from imageform.workflows._spec import (
 
 __all__ = [
     "CHUNKED_CHOICES",
+    "CHUNKED_HELP",
     "CHUNKED_OPTIONS",
     "DISPLAYABLE_SPACES",
     "WORKFLOWS",
@@ -99,6 +100,11 @@ _ChunkedWbMethod = Literal["gray_world", "shades_of_gray", "manual"]
 #: (its ``--help`` lists these alone, and the others are refused).
 CHUNKED_CHOICES: Mapping[str, Mapping[str, tuple[str, ...]]] = MappingProxyType(
     {"white_balance": MappingProxyType({"method": get_args(_ChunkedWbMethod)})}
+)
+#: The help of an option ``imageform chunked COMMAND`` words for its narrower choices:
+#: command -> field -> help (``--p`` of the single command names gray-edge too).
+CHUNKED_HELP: Mapping[str, Mapping[str, str]] = MappingProxyType(
+    {"white_balance": MappingProxyType({"p": "shades-of-gray: Minkowski norm p, 1 to 10000."})}
 )
 
 # ---------------------------------------------------------------- convert
@@ -397,7 +403,8 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
     illuminant: str | None = option(None, help="manual: illuminant name, e.g. A, D50, F2.")
     cct: float | None = option(
         None,
-        help="manual: correlated colour temperature in kelvin, 1667 or above.",
+        help="manual: correlated colour temperature in kelvin, 1667 or above (an sRGB "
+        "image holds the whites from 1900 K).",
         minimum=1e6 / 600,
     )
     normalize: _WbNormalize = option(
