@@ -413,3 +413,52 @@ def test_convert_of_a_linear_tagged_integer_tiff(tmp_path: Path) -> None:
     r = process_chunked(src, tmp_path / "s.zarr", "convert", {"to": "srgb"}, dtype="float32")
     ref = np.asarray(convert(img.astype(np.float32) / 255, "linear_srgb", "srgb"))
     np.testing.assert_allclose(_read(r.output), ref, atol=1e-6)
+
+
+def test_the_output_declares_its_colour_space(tmp_path: Path) -> None:
+    """What ``chunked`` writes, ``info`` and every ``--from auto`` reader read back: a space
+    without a profile (Lab) named in the description, a profiled one embedded, and white
+    balance keeping the input's profile (they all read back as sRGB; a Lab output converted
+    'from auto' was copied as sRGB and clipped)."""
+    from imageform.io import image_color_space, read_image
+
+    src = tmp_path / "in.tif"
+    img = _image(256, 384)
+    tifffile.imwrite(src, img, tile=(128, 128), photometric="rgb")
+    lab = tmp_path / "lab.tif"
+    assert main(["chunked", "convert", str(src), "--to", "lab", "-o", str(lab)]) == 0
+    declared = image_color_space(lab)
+    assert (declared.name, declared.source) == ("lab", "tiff-description")
+    back = tmp_path / "back.tif"
+    assert main(["convert", str(lab), "--from", "auto", "--to", "srgb", "-o", str(back)]) == 0
+    np.testing.assert_allclose(read_image(back), img / 255.0, atol=1e-4)
+    p3 = tmp_path / "p3.tif"
+    assert main(["chunked", "convert", str(src), "--to", "display-p3", "-o", str(p3)]) == 0
+    assert image_color_space(p3).name == "display_p3"
+    wb = tmp_path / "wb.tif"
+    assert main(["chunked", "white-balance", str(p3), "-o", str(wb)]) == 0
+    assert image_color_space(wb).name == "display_p3"
+    # an sRGB output declares nothing, as write_image writes it
+    srgb = tmp_path / "srgb.tif"
+    assert main(["chunked", "convert", str(lab), "--from", "auto", "-o", str(srgb)]) == 0
+    assert image_color_space(srgb).name is None
+
+
+def test_white_balance_of_a_linear_file_is_linear(tmp_path: Path) -> None:
+    """A file that declares linear light is balanced as linear, by the single command and by
+    chunked alike (both decoded it with sRGB's curve: gains 0.51/1.22/4.90 for a grey world
+    tinted 0.9/0.6/0.3 in linear light, where 2/3, 1, 2 balance it)."""
+    from imageform.io import image_color_space, read_image, write_image
+
+    rng = np.random.default_rng(1)
+    lin = (rng.random((256, 256, 3)) * [0.9, 0.6, 0.3]).astype(np.float32)
+    src = tmp_path / "tint.tif"
+    write_image(src, lin, color_space="linear_srgb")
+    one, many = tmp_path / "one.tif", tmp_path / "many.tif"
+    assert main(["white-balance", str(src), "-o", str(one), "--json"]) == 0
+    assert main(["chunked", "white-balance", str(src), "-o", str(many), "--chunk", "128"]) == 0
+    gains = lin.mean(axis=(0, 1)).mean() / lin.mean(axis=(0, 1))
+    np.testing.assert_allclose(gains, [2 / 3, 1, 2], rtol=0.02)
+    for out in (one, many):
+        np.testing.assert_allclose(read_image(out), lin * gains, atol=1e-5)
+        assert image_color_space(out).name == "linear_srgb"

@@ -31,24 +31,30 @@ def _convert_block(block: np.ndarray, src: str, dst: str, params: dict[str, Any]
     return np.asarray(convert(as_values(block, src), src, dst, **params), dtype=np.float32)
 
 
-def _balance_block(block: np.ndarray, gains: np.ndarray) -> np.ndarray:
+def _balance_block(block: np.ndarray, gains: np.ndarray, transfer: str = "srgb") -> np.ndarray:
     from imageform._validate import as_image
     from imageform.color.transfer import decode, encode
 
-    lin = decode(as_image(block, "image", channels=3), "srgb")
-    return np.asarray(encode(lin * gains, "srgb"), dtype=np.float32)
+    lin = decode(as_image(block, "image", channels=3), transfer)
+    return np.asarray(encode(lin * gains, transfer), dtype=np.float32)
 
 
-def _linear_block(block: np.ndarray, p: float) -> np.ndarray:
+def _linear_block(block: np.ndarray, p: float, transfer: str = "srgb") -> np.ndarray:
     from imageform._validate import as_image
     from imageform.color.transfer import decode
 
-    lin = np.asarray(decode(as_image(block, "image", channels=3), "srgb"), dtype=np.float64)
+    lin = np.asarray(decode(as_image(block, "image", channels=3), transfer), dtype=np.float64)
     return lin if p == 1.0 else lin**p
 
 
-def _wb_gains(x: Any, options: dict[str, Any]) -> np.ndarray:
-    """White-balance gains in linear light; the illuminant is a reduction over all blocks."""
+def _wb_gains(
+    x: Any, options: dict[str, Any], transfer: str = "srgb", space: str = "srgb"
+) -> np.ndarray:
+    """White-balance gains in linear light; the illuminant is a reduction over all blocks.
+
+    ``transfer`` decodes the blocks (the file's declared encoding), ``space`` is the RGB
+    space of ``manual``'s white.
+    """
     from imageform.color.white_balance import white_balance
 
     method = check_option(
@@ -60,11 +66,13 @@ def _wb_gains(x: Any, options: dict[str, Any]) -> np.ndarray:
     if method == "manual":  # the gains do not depend on the image
         probe = np.full((1, 1, 3), 0.5, dtype=np.float32)
         kw = {k: options[k] for k in ("illuminant", "cct") if options.get(k) is not None}
-        return np.asarray(white_balance(probe, "manual", normalize=normalize, **kw).gains)
+        return np.asarray(
+            white_balance(probe, "manual", normalize=normalize, space=space, **kw).gains
+        )
     p = float(options.get("p", 6.0)) if method == "shades_of_gray" else 1.0
     if p < 1.0:
         raise InvalidInputError(f"expected Minkowski p >= 1, got {p!r}")
-    powered = x.map_blocks(_linear_block, p, dtype=np.float64)
+    powered = x.map_blocks(_linear_block, p, transfer, dtype=np.float64)
     e = np.asarray(powered.mean(axis=(0, 1)).compute()) ** (1.0 / p)
     if not np.all(e > 0):
         raise InvalidInputError(f"illuminant estimate {e.tolist()} has an empty channel")

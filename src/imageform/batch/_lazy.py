@@ -179,8 +179,8 @@ class _TiffMeta:
     """What a TIFF output copies from a TIFF input.
 
     The level sizes (level 0 first), the tile side (None: strips or non-square tiles),
-    compression (tifffile's tag value), resolution (pixels per unit, x and y), its unit and
-    level 0's description.
+    compression (tifffile's tag value), resolution (pixels per unit, x and y), its unit,
+    level 0's description and ICC profile (the InterColorProfile tag's bytes).
     """
 
     levels: tuple[tuple[int, int], ...]
@@ -191,6 +191,7 @@ class _TiffMeta:
     description: str | None
     ome: bool = False
     microns: tuple[float, float] | None = None
+    icc: bytes | None = None
 
 
 def _microns(desc: str) -> tuple[float, float] | None:
@@ -270,8 +271,17 @@ def _tiff_meta(p: Path) -> _TiffMeta:
             desc = None
         if microns is not None and (res is None or unit in (None, 1) or res == (1.0, 1.0)):
             res, unit = (1e4 / microns[0], 1e4 / microns[1]), 3  # pixels per centimetre
+        icc = tags["InterColorProfile"].value if "InterColorProfile" in tags else None
         return _TiffMeta(
-            tuple(levels), tile, int(page.compression), res, unit, desc, tf.is_ome, microns
+            tuple(levels),
+            tile,
+            int(page.compression),
+            res,
+            unit,
+            desc,
+            tf.is_ome,
+            microns,
+            bytes(icc) if isinstance(icc, (bytes, bytearray)) and icc else None,
         )
 
 

@@ -19,6 +19,11 @@ from imageform._validate import check_option
 from imageform.batch._lazy import _factor, _TiffMeta
 from imageform.errors import InvalidInputError
 
+#: The key of a TIFF description's JSON that names a space without an ICC profile, as
+#: :func:`imageform.io.write_image` writes it and :func:`imageform.io.image_color_space` reads
+#: it back (tests/batch pins the round trip).
+COLOR_SPACE_KEY = "imageform_color_space"
+
 #: Compressions of a TIFF output (``None``: the input's, when tifffile can write it).
 _COMPRESSIONS = ("none", "zlib", "lzw", "zstd", "jpeg")
 #: JPEG quality of a JPEG output (the input's quality is not stored in the file).
@@ -170,7 +175,10 @@ def _write_zarr(tmp: Path, x: Any, op: tuple[Any, ...], dtype: str, chunk: int) 
 class _TiffSpec:
     """How a TIFF output is written.
 
-    Its levels, tile side, compression, encoding threads and the input's tags to copy.
+    Its levels, tile side, compression, encoding threads, the input's tags to copy, and the
+    output's colour space: an ICC profile to embed, or the name of a space without one, which
+    level 0's description records (``{"imageform_color_space": "lab"}``, as
+    :func:`imageform.io.write_image` writes it), replacing the input's text.
     """
 
     levels: tuple[tuple[int, int], ...]
@@ -178,6 +186,8 @@ class _TiffSpec:
     compression: str
     workers: int
     meta: _TiffMeta | None
+    icc: bytes | None = None
+    recorded: str | None = None
 
 
 class _Spool:
@@ -296,6 +306,14 @@ def _write_tiff(
             first_kw["metadata"].update(
                 PhysicalSizeX=meta.microns[0], PhysicalSizeY=meta.microns[1]
             )
+    description = meta.description if meta is not None else None
+    if spec.recorded is not None:  # a space without a profile: named in level 0's description
+        import json
+
+        description, ome = json.dumps({COLOR_SPACE_KEY: spec.recorded}), False
+        first_kw["metadata"] = None
+    if spec.icc is not None:
+        first_kw["iccprofile"] = spec.icc
     try:
         with tifffile.TiffWriter(tmp, bigtiff=nbytes > 2**32 - 2**26, ome=ome) as tw:
             h, w = levels[0]
@@ -304,7 +322,7 @@ def _write_tiff(
                 level0(first),
                 shape=(h, w, channels),
                 subifds=len(levels) - 1 or None,
-                description=meta.description if meta is not None else None,
+                description=description,
                 **resolution(0),
                 **first_kw,
             )

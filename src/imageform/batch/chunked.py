@@ -60,7 +60,7 @@ from imageform.errors import (
     UnknownOptionError,
     UnreadableFileError,
 )
-from imageform.workflows.color import CHUNKED_OPTIONS, DISPLAYABLE_SPACES
+from imageform.workflows.color import CHUNKED_OPTIONS, DISPLAYABLE_SPACES, declared_encoding
 
 __all__ = ["CHUNKED_COMMANDS", "ChunkedResult", "open_lazy", "process_chunked"]
 
@@ -111,6 +111,29 @@ def _declared(path: Path) -> str:
     if path.suffix.lower() not in IMAGE_FORMATS or not path.is_file():
         return "srgb"  # a Zarr store declares nothing imageform reads
     return image_color_space(path).name or "srgb"
+
+
+def _out_space(
+    cmd: str, opts: dict[str, Any], src: Path, meta: Any
+) -> tuple[bytes | None, str | None]:
+    """Return the output TIFF's colour space: (an ICC profile to embed, a space to record).
+
+    ``convert`` writes its ``to`` space as :func:`imageform.io.write_image` would (a shipped
+    profile; sRGB none; a space without a profile, Lab, XYZ, HSV, linear ..., named in the
+    description); white balance and stain normalisation keep the input's space (its profile's
+    bytes, or the space its description recorded), so that ``--from auto`` reads it back.
+    """
+    from imageform.io import image_color_space
+    from imageform.io.icc import RGB_PROFILED, embedded_profile
+
+    if cmd == "convert":
+        to = str(opts["to"])
+        return (embedded_profile(to), None) if to in RGB_PROFILED else (None, to)
+    icc = meta.icc if meta is not None else None
+    if icc is not None or src.suffix.lower() not in (".tif", ".tiff"):
+        return icc, None
+    declared = image_color_space(src)
+    return None, declared.name if declared.source == "tiff-description" else None
 
 
 def _options(cmd: str, options: Any) -> dict[str, Any]:
@@ -339,8 +362,9 @@ def process_chunked(
                 op = (_stain_block, opts["method"], stats_t, stats_s)
                 displayable = True
             else:
-                gains = _wb_gains(x, opts)
-                op = (_balance_block, gains)
+                transfer, space = declared_encoding(_declared(src_p))  # linear: as linear
+                gains = _wb_gains(x, opts, transfer, space)
+                op = (_balance_block, gains, transfer)
                 displayable = True
             out_dtype = dtype or (str(x.dtype) if in_int and displayable else "float32")
             check_option(out_dtype, _OUT_DTYPES, "output dtype")
@@ -353,7 +377,8 @@ def process_chunked(
                 if out_kind == "zarr":
                     written.append(_write_zarr(tmp, x, op, out_dtype, chunk))
                 else:
-                    spec = _TiffSpec(levels, tile, str(comp), workers, meta)
+                    icc, recorded = _out_space(cmd, opts, src_p, meta)
+                    spec = _TiffSpec(levels, tile, str(comp), workers, meta, icc, recorded)
                     written.append(_write_tiff(tmp, x, op, out_dtype, chunk, spec))
 
             # all or nothing (imageform._files): a FIFO or a device at dst is never replaced, a

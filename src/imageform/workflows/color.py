@@ -461,6 +461,24 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
         }
 
 
+def declared_encoding(space: str | None) -> tuple[str, str]:
+    """Return (transfer function, RGB space) of an image file that declares ``space``.
+
+    White balance divides the illuminant out in linear light: a file that declares a linear
+    space (a linear-light TIFF's profile) is decoded with ``"linear"``, one in Adobe RGB or
+    ProPhoto with their own curves; a file that declares nothing, or a space that is no RGB
+    space, is read as sRGB. The space is that of ``--method manual``'s white.
+    """
+    from imageform.color import RGB_SPACES
+
+    name = str(space or "srgb")
+    if name.startswith("linear_") and name[len("linear_") :] in RGB_SPACES:
+        return "linear", name[len("linear_") :]
+    if name in RGB_SPACES:
+        return RGB_SPACES[name].transfer, name
+    return "srgb", "srgb"
+
+
 def _check_illuminant(name: str) -> None:
     """Refuse an ``--illuminant`` that is no white point or RGB space, naming the flag."""
     from imageform._validate import describe
@@ -495,6 +513,7 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
 
     declared = image_color_space(image).name  # the output keeps the input's profile
     tag = declared if declared in RGB_PROFILED else None
+    transfer, space = declared_encoding(declared)  # a linear file is balanced as linear
     chart = None
     flag = "IMAGE" if opts.chart is None else "--chart"
     if normalize_choice(opts.method, _WB_METHODS, "--method") == "chart":
@@ -518,8 +537,10 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
         )
 
         # the estimate reads the whole image on the CPU; the gains are applied on the device
-        gains = np.asarray(white_balance_gains(img, opts.method, **opts.params()))
-        fn: Any = lambda band: apply_white_balance_gains(band, gains)  # noqa: E731
+        gains = np.asarray(
+            white_balance_gains(img, opts.method, transfer=transfer, space=space, **opts.params())
+        )
+        fn: Any = lambda band: apply_white_balance_gains(band, gains, transfer=transfer)  # noqa: E731
         if opts.device == "cuda":
             fn = gpu_bands(run, f"the gains on a {img.dtype} image", fn)
         n_out = write_mapped(run, out, img, fn, opts, like=img, color_space=tag)[0]
