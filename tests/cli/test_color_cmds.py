@@ -299,3 +299,25 @@ def test_info_of_a_raw_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     assert (got["format"], got["width"], got["height"], got["cfa_pattern"]) == (
         "raw", 24, 16, "GRBG")  # fmt: skip
     assert got["white_level"] == 4095 and np.allclose(got["black_level"], 64)
+
+
+@pytest.mark.parametrize("suffix", [".crw", ".kdc", ".raw", ".gpr", ".3fr", ".mrw"])
+def test_info_of_older_raw_suffixes(
+    suffix: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`info` reads every raw suffix LibRaw reads (a Canon CRW, a Kodak .raw and a GoPro GPR
+    of public repositories were 'unknown image file type' while `develop` read them), and
+    a file of such a suffix that is no raw gives develop's one line, not the image reader's."""
+    pytest.importorskip("rawpy")
+    from imageform.io import write_dng
+
+    mosaic = (np.random.default_rng(5).random((16, 24)) * 3000 + 200).astype(np.uint16)
+    raw = write_dng(tmp_path / f"a{suffix}", mosaic, black_level=64, white_level=4095,
+                    color_matrix=np.eye(3))  # fmt: skip
+    assert main(["info", str(raw), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["format"] == "raw"
+    junk = tmp_path / f"junk{suffix}"
+    junk.write_bytes(b"\x00" * 4096)
+    assert main(["info", str(junk)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not a raw file LibRaw can read" in err, err

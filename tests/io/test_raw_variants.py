@@ -425,6 +425,33 @@ def test_automatic_white_balance_as_libraw(base: tuple[Path, list[tuple], np.nda
     assert np.all(np.isfinite(_auto_gains(odd)))
 
 
+def test_automatic_white_balance_scales_the_two_greens_apart(
+    base: tuple[Path, list[tuple], np.ndarray],
+) -> None:
+    """LibRaw's automatic white balance (and use_camera_wb's fallback) gives the second
+    green of the tile its own multiplier; pooled, a real Canon CRW (no as-shot balance, a
+    1.3 % green imbalance) developed 0.18 ΔE00 from LibRaw (benchmarks/check_raw_fresh.py)."""
+    from imageform.io.raw import _auto_gains
+
+    with __import__("tifffile").TiffFile(base[0]) as tf:
+        data = tf.pages[0].asarray().astype(np.float64)
+    data[1::2, 0::2] = 64 + (data[1::2, 0::2] - 64) * 0.96  # the second green 4 % darker
+    path = _variant(base, "green_split", drop={50728}, data=np.round(data).astype(np.uint16))
+    raw = read_raw(path)
+    mul = _auto_gains(raw)
+    assert mul.shape == (2, 2)
+    assert mul[1, 0] / mul[0, 1] == pytest.approx(1 / 0.96, rel=0.01)
+    for wb, theirs in (("camera", {}), ("auto", {"use_camera_wb": False, "use_auto_wb": True})):
+        dev = develop(raw, white_balance=wb)
+        assert dev.gains.min() == pytest.approx(1.0)
+        assert _mean_de00(dev.image, _libraw(path, **theirs)) < 0.03
+        # the other demosaicing methods take the same gains (the white-balanced mosaic)
+        balanced = dev.white_balanced
+        assert np.median(balanced[1::2, 0::2]) == pytest.approx(
+            np.median(balanced[0::2, 1::2]), rel=0.01
+        )
+
+
 def _monochrome(base: tuple[Path, list[tuple], np.ndarray], name: str, grey: np.ndarray) -> Path:
     """A monochrome DNG (LinearRaw, one sample a pixel, no colour tags), as a Leica Monochrom
     writes it. tifffile writes LinearRaw with three samples only: the tag is set afterwards."""
@@ -895,3 +922,36 @@ def test_a_raw_cut_well_short_is_refused_before_libraw_speaks(
         read_raw(cut)
     assert capfd.readouterr().err == ""
     assert cut.read_bytes() == before
+
+
+def test_white_level_below_most_samples(base: tuple[Path, list[tuple], np.ndarray]) -> None:
+    """A white level most samples lie above (LibRaw's 255 for a Nikon Coolscan's 16-bit NEF)
+    is the file's error, not the scene's: the samples' bit depth, with a note, instead of an
+    all-white development; a few samples above white (clipped highlights) change nothing."""
+    tags = [t for t in base[1] if t[0] != 50717] + [(50717, 3, 1, (255,), True)]
+    path = _variant((base[0], tags, base[2]), "white_low")
+    raw = read_raw(path)
+    assert raw.white_level == 4095 and raw.metadata["white_level_libraw"] == 255
+    dev = develop(raw)
+    assert any("below most of its samples" in n for n in dev.notes)
+    assert 0.05 < float(np.median(dev.image)) < 0.95
+    ok = read_raw(base[0])
+    assert ok.white_level == 4095 and "white_level_libraw" not in ok.metadata
+
+
+def test_gpr_vc5_refused_naming_the_compression(
+    base: tuple[Path, list[tuple], np.ndarray], tmp_path: Path
+) -> None:
+    """A GoPro GPR (a DNG compressed with VC-5, Compression 9, which rawpy's LibRaw is built
+    without) is refused in one line naming the compression, not as 'not a raw file'."""
+    import tifffile
+
+    data = bytearray(base[0].read_bytes())
+    with tifffile.TiffFile(base[0]) as tf:
+        entry = tf.pages[0].tags[259].offset  # the IFD entry: tag, type, count, value
+    data[entry + 8 : entry + 10] = (9).to_bytes(2, "little")
+    gpr = tmp_path / "hero.gpr"
+    gpr.write_bytes(bytes(data))
+    with pytest.raises(UnreadableFileError, match=r"VC-5.*Compression 9") as err:
+        read_raw(gpr)
+    assert "\n" not in str(err.value)
