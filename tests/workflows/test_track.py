@@ -412,3 +412,30 @@ def test_plan_mesh_is_read_with_trimesh(tmp_path: Path) -> None:
     with pytest.raises(InvalidInputError, match="plan") as info:
         read_plan(bad)
     assert "\n" not in str(info.value)
+
+
+def test_tracked_corners_blurred_by_motion_are_not_kept() -> None:
+    """Half the board smeared (a hand-held board at a few frames a second): the tracked
+    corners there pass the detector's blur test or are left out, so the pose keeps to the
+    truth (before: all 24 tracked, those in the blur 1.8 px off, the pose 1.7 degrees off)."""
+    import cv2
+
+    from imageform.geometry import rvec_to_matrix
+
+    tex, origin = video_scenes.board_texture()
+    board = CharucoBoard((7, 5), 30.0, 22.0, "5x5_100")
+    tracker = BoardTracker(board, K)
+    a, b = video_scenes.poses(48)[:2]
+    first = tracker.update(video_scenes.render(tex, origin, K, a, SIZE))
+    assert first.found and first.corners == 24
+    frame = video_scenes.render(tex, origin, K, b, SIZE)
+    cut = int(np.median(first.image_points[:, 0]))
+    frame[:, cut:] = cv2.GaussianBlur(frame, (0, 0), 3.0)[:, cut:]
+    pose = tracker.update(frame)
+    assert pose.found
+    R, t = b
+    true_uv = np.asarray(Camera(K, R, t).project(pose.object_points)[0])
+    assert np.all(np.linalg.norm(pose.image_points - true_uv, axis=1) < 0.5)
+    assert np.linalg.norm(pose.tvec - t) / np.linalg.norm(t) < 0.002
+    dR = np.asarray(rvec_to_matrix(pose.rvec)) @ R.T
+    assert np.degrees(np.arccos(np.clip((np.trace(dR) - 1) / 2, -1, 1))) < 0.5

@@ -17,7 +17,12 @@ drawn in board coordinates on the live image.
   then the detector's own window from there)
   instead of detecting the board again; the frame is accepted only when at least 80 % of
   the corners refine, none moves more than half a square from its prediction, and the PnP
-  fit of all of them leaves every corner within 1.5 pixels (RMS within 0.75). Anything
+  fit of all of them leaves every corner within 1.5 pixels (RMS within 0.75). A ChArUco
+  corner must also pass the detector's blur test (refined again through a window a pixel
+  larger, it moves at most ``charuco._MAX_WINDOW_SHIFT``): corners smeared by motion are
+  left out, and when fewer than 80 % pass, the board is detected again, the tracked
+  corners standing in only where that finds no board (hand-held boards filmed at 6 frames
+  a second: benchmarks/results/track-fresh-2026-11-30g.md). Anything
   else, and every ``redetect``-th frame (to pick up corners that came into view), falls
   back to detection. A refinement costs a few milliseconds where a detection costs tens.
   The detected frames use the same gradient refinement (``find_checkerboard`` and
@@ -209,6 +214,9 @@ class BoardTracker:
         #: the checkerboard's sub-pixel refinement (find_checkerboard's ``method``), detected
         #: and tracked frames alike
         self._refinement: Literal["symmetric", "gradient"] = "gradient"
+        #: a ChArUco frame's tracked corners, blurred ones included, kept in case detection
+        #: finds no board in the frame
+        self._spare: tuple[NDArray[np.float64], NDArray[np.int64]] | None = None
 
     def reset(self) -> None:
         """Forget the previous frames (a cut in the video)."""
@@ -321,15 +329,30 @@ class BoardTracker:
             crop, np.asarray(res.corners), half_window=max(2, fine), max_iter=40, tol=1e-4
         )
         got = np.asarray(res2.corners, np.float64)
+        # a ChArUco corner must pass the detector's blur test: a saddle that blur has merged
+        # with the markers' borders moves when the window grows by a pixel
+        steady = np.ones(got.shape[0], dtype=bool)
+        if self._charuco is not None:
+            from imageform.geometry.charuco import _MAX_WINDOW_SHIFT
+
+            res3 = refine_corners(crop, got, half_window=max(2, fine) + 1, max_iter=40, tol=1e-4)
+            steady = np.linalg.norm(np.asarray(res3.corners) - got, axis=1) <= _MAX_WINDOW_SHIFT
         if sym:
             got = self._symmetric(crop, got, hs, square)
         got = got + offset
         ok = np.isin(np.asarray(res.status), (0, 1)) & np.isin(np.asarray(res2.status), (0, 1))
         ok &= np.linalg.norm(got - pred[inside], axis=1) < 0.5 * square
+        need = max(self.min_corners, int(np.ceil(0.8 * ids.size)))
         keep = np.flatnonzero(inside)[ok]
-        if keep.size < max(self.min_corners, int(np.ceil(0.8 * ids.size))):
+        if keep.size < need:
             return None
-        return got[ok], ids[keep]
+        held = ok & steady
+        if np.count_nonzero(held) < need:
+            # too many corners blurred: the board is detected again, and these corners are
+            # the frame's pose only if that finds no board (_spare)
+            self._spare = (got[ok], ids[keep])
+            return None
+        return got[held], ids[np.flatnonzero(inside)[held]]
 
     def _symmetric(
         self, crop: np.ndarray, uv: NDArray[np.float64], h: int, square: float
@@ -368,6 +391,7 @@ class BoardTracker:
         h, w = a.shape[:2]
         self._quiet = self._quiet + 1 if self._vain >= _SMEAR_PATIENCE else 0
         self._frame_vain = False
+        self._spare = None
         uv = np.zeros((0, 2))
         ids = np.zeros(0, np.int64)
         searched = "none"
@@ -397,6 +421,9 @@ class BoardTracker:
             if uv.shape[0] < self.min_corners:
                 uv, ids = self._detect(a)
                 searched = "frame"
+            if uv.shape[0] < self.min_corners and self._spare is not None:
+                uv, ids = self._spare
+                searched = "tracked"
             if uv.shape[0] < self.min_corners:
                 return self._lost(uv)
             if self._pattern is not None:
@@ -408,7 +435,12 @@ class BoardTracker:
                 return self._lost(uv)
             if not bool(res.valid) or not np.isfinite(res.rms):
                 return self._lost(uv)
-            self._since_detection = 0
+            if searched != "tracked":
+                self._since_detection = 0
+            elif not self._fits(uv, X, res):
+                return self._lost(uv)
+            else:
+                self._since_detection += 1
         else:
             self._since_detection += 1
         self._vain = self._quiet = 0
