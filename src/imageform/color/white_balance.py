@@ -52,6 +52,14 @@ the smallest mean and median error, every method took the 34 degree cast of the
 machine-vision photographs to 2.3-6.3 degrees, and on phone JPEGs (balanced by the phone) the
 photograph as it came was often as close as any estimate. ``gray_world`` stays the default.
 
+``mask`` (H, W) keeps the pixels to measure the light by, as the colour-constancy sets do
+(the chart and the clipped pixels left out): the means and the percentile are over the kept
+pixels, ``gray_edge`` blurs by a normalised convolution (:math:`G * (\rho m) / G * m`) and
+keeps a derivative when its whole stencil is kept, and ``grayness_index`` and ``pca`` take
+their candidates among the kept pixels. Clipped highlights pull every estimator towards
+their own colour (``benchmarks/results/illuminant-fresh-2026-11-30g.md``); the library does
+not guess the sensor's saturation, the caller masks it.
+
 Dask images are balanced lazily: the estimate is a Dask reduction over the whole image (a
 mean, a Minkowski mean, or for ``"white_patch"`` an exact percentile from
 :func:`dask.array.topk` of the ``n - floor((n - 1) q / 100)`` largest values per channel;
