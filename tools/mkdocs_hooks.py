@@ -92,6 +92,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "gpu-host-h200": "benchmarks/profile_gpu_host.py",
     "sass-colour": "benchmarks/sass_colour.py",
     "sass-demosaic": "benchmarks/sass_demosaic.py",
+    "illuminant-fresh": "benchmarks/check_illuminant_fresh.py",
     "illuminant-real": "benchmarks/check_illuminant_real.py",
     "horizon-natural": "benchmarks/check_horizon_natural.py",
     "local-homography": "benchmarks/check_local_homography.py",

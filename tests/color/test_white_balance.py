@@ -449,3 +449,98 @@ def test_white_patch_at_a_black_percentile_says_why() -> None:
     img[:4] = 0.0  # a black band: the low percentiles of every channel are 0
     with pytest.raises(DegenerateConfigurationError, match="the 1th percentile of a channel"):
         white_balance(img, method="white_patch", percentile=1.0, transfer="linear")
+
+
+def _angle(e: object, t: np.ndarray) -> float:
+    e = np.asarray(to_np(e), dtype=np.float64)
+    c = float(e @ t / (np.linalg.norm(e) * np.linalg.norm(t)))
+    return float(np.degrees(np.arccos(min(1.0, c))))
+
+
+def _scene_with_chart_and_highlight() -> tuple[np.ndarray, np.ndarray]:
+    """A grey scene under ILLUM with a red chart and a clipped highlight, and their mask."""
+    img = _grey_scene(3, (48, 60)) * 0.9
+    keep = np.ones(img.shape[:2], bool)
+    img[5:15, 8:20] = [0.8, 0.1, 0.1]  # a colour chart: not grey, not lit by ILLUM alone
+    img[30:38, 40:52] = 1.0  # a highlight clipped in every channel
+    keep[5:15, 8:20] = False
+    keep[30:38, 40:52] = False
+    return img, keep
+
+
+@pytest.mark.parametrize("method", [*ESTIMATORS, "max_rgb"])
+def test_mask_leaves_out_the_chart_and_the_clipped_pixels(method: str) -> None:
+    """The colour-constancy sets' convention (Gehler-Shi, NUS, Cube+: the chart and the
+    saturated pixels masked out): with the mask, every estimator recovers the light of the
+    grey scene around them; the whole mask kept is the same as no mask."""
+    img, keep = _scene_with_chart_and_highlight()
+    e = estimate_illuminant(img, method, transfer="linear", mask=keep)
+    assert _angle(e, ILLUM) < 1e-6
+    full = estimate_illuminant(img, method, transfer="linear", mask=np.ones_like(keep))
+    np.testing.assert_allclose(full, estimate_illuminant(img, method, transfer="linear"))
+
+
+@pytest.mark.parametrize("method", ["gray_world", "max_rgb", "shades_of_gray", "gray_edge"])
+def test_without_the_mask_the_chart_and_highlight_bias_the_estimate(method: str) -> None:
+    img, _ = _scene_with_chart_and_highlight()
+    assert _angle(estimate_illuminant(img, method, transfer="linear"), ILLUM) > 1.0
+
+
+def test_mask_statistics_are_those_of_the_kept_pixels() -> None:
+    """Mean, Minkowski mean and percentile over the kept pixels, as NumPy on img[mask]."""
+    rng = np.random.default_rng(4)
+    img = rng.uniform(0.0, 1.0, (30, 40, 3))
+    keep = rng.uniform(size=(30, 40)) > 0.3
+    kept = img[keep]
+    lin = {"transfer": "linear", "mask": keep}
+    np.testing.assert_allclose(estimate_illuminant(img, **lin), kept.mean(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(
+        estimate_illuminant(img, "shades_of_gray", p=4.0, **lin),
+        (kept**4).mean(axis=0) ** 0.25,
+        rtol=1e-12,
+    )
+    for q in (0.0, 37.5, 90.0, 100.0):
+        np.testing.assert_allclose(
+            estimate_illuminant(img, "white_patch", percentile=q, **lin),
+            np.percentile(kept, q, axis=0),
+            rtol=1e-12,
+        )
+
+
+def test_mask_of_a_batch_and_of_a_dask_image() -> None:
+    """A mask per image of a batch (or one for all) and a Dask image give the eager
+    single-image answers."""
+    import dask.array as da
+
+    img, keep = _scene_with_chart_and_highlight()
+    other = np.ascontiguousarray(img[::-1])
+    batch = np.stack([img, other])
+    masks = np.stack([keep, np.ones_like(keep)])
+    for method in ("white_patch", "gray_edge", "pca", "grayness_index"):
+        got = estimate_illuminant(batch, method, transfer="linear", mask=masks)
+        np.testing.assert_allclose(
+            got[0], estimate_illuminant(img, method, transfer="linear", mask=keep)
+        )
+        np.testing.assert_allclose(got[1], estimate_illuminant(other, method, transfer="linear"))
+        lazy = estimate_illuminant(
+            da.from_array(img, chunks=(16, 20, 3)), method, transfer="linear", mask=keep
+        )
+        np.testing.assert_allclose(
+            np.asarray(lazy.compute()),
+            estimate_illuminant(img, method, transfer="linear", mask=keep),
+            rtol=1e-10,
+        )
+    out = white_balance(img, "gray_edge", transfer="linear", mask=keep)
+    assert _angle(1.0 / to_np(out.gains), ILLUM) < 1e-6
+
+
+def test_mask_bad_inputs() -> None:
+    img, keep = _scene_with_chart_and_highlight()
+    with pytest.raises(InvalidInputError, match="mask"):
+        estimate_illuminant(img, transfer="linear", mask=keep[:-1])
+    with pytest.raises(InvalidInputError, match="mask"):
+        estimate_illuminant(img, transfer="linear", mask=keep.astype(float) * 0.5)
+    with pytest.raises(InvalidInputError, match="mask"):
+        estimate_illuminant(img, transfer="linear", mask=keep[0])
+    with pytest.raises(DegenerateConfigurationError, match="keeps no pixel"):
+        estimate_illuminant(img, "gray_edge", transfer="linear", mask=np.zeros_like(keep))

@@ -143,7 +143,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.describe_delta_e": call(value=1.0),
     "imageform.color.downsample": call(image=V("rgb"), factor=2),
     "imageform.color.encode": call(values=V("rgb4")),
-    "imageform.color.estimate_illuminant": call(image=V("rgb")),
+    "imageform.color.estimate_illuminant": call(image=V("rgb"), mask=np.ones((6, 8), dtype=bool)),
     "imageform.color.from_opencv": call(V("rgb_u8"), "bgr"),
     "imageform.color.gamma_to_linear": call(values=V("rgb4")),
     "imageform.color.gamut_area": call(),
@@ -212,7 +212,7 @@ VALID: dict[str, C | Skip] = {
     "imageform.color.uv_prime_to_xy": call(uv=V("uv")),
     "imageform.color.viridis": call(),
     "imageform.color.visible_area": call(),
-    "imageform.color.white_balance": call(image=V("rgb")),
+    "imageform.color.white_balance": call(image=V("rgb"), mask=np.ones((6, 8), dtype=bool)),
     "imageform.color.white_balance.white_balance_gains": call(image=V("rgb")),
     "imageform.color.white_balance.apply_white_balance_gains": call(
         image=V("rgb"), gains=(1.1, 1.0, 0.9)

@@ -52,6 +52,14 @@ the smallest mean and median error, every method took the 34 degree cast of the
 machine-vision photographs to 2.3-6.3 degrees, and on phone JPEGs (balanced by the phone) the
 photograph as it came was often as close as any estimate. ``gray_world`` stays the default.
 
+``mask`` (H, W) keeps the pixels to measure the light by, as the colour-constancy sets do
+(the chart and the clipped pixels left out): the means and the percentile are over the kept
+pixels, ``gray_edge`` blurs by a normalised convolution (:math:`G * (\rho m) / G * m`) and
+keeps a derivative when its whole stencil is kept, and ``grayness_index`` and ``pca`` take
+their candidates among the kept pixels. Clipped highlights pull every estimator towards
+their own colour (``benchmarks/results/illuminant-fresh-2026-11-30g.md``); the library does
+not guess the sensor's saturation, the caller masks it.
+
 Dask images are balanced lazily: the estimate is a Dask reduction over the whole image (a
 mean, a Minkowski mean, or for ``"white_patch"`` an exact percentile from
 :func:`dask.array.topk` of the ``n - floor((n - 1) q / 100)`` largest values per channel;
@@ -160,25 +168,47 @@ def _method(method: str, percentile: float | None) -> tuple[str, float]:
 
 
 def _flat(xp: Any, lin: Any) -> Any:
-    """(..., H, W, 3) -> (..., H*W, 3)."""
+    """(..., H, W, C) -> (..., H*W, C)."""
     shape = tuple(lin.shape)
-    return xp.reshape(lin, (*shape[:-3], shape[-3] * shape[-2], 3))
+    return xp.reshape(lin, (*shape[:-3], shape[-3] * shape[-2], shape[-1]))
 
 
-def _percentile(xp: Any, lin: Any, q: float) -> Any:
-    """Per-channel percentile over pixels, linear interpolation (NumPy's default)."""
+def _percentile(xp: Any, lin: Any, q: float, w: Any = None, kept: Any = None) -> Any:
+    """Per-channel percentile over pixels, linear interpolation (NumPy's default).
+
+    With a mask (``w`` 0/1, ``kept`` the NumPy count of kept pixels per image), the
+    percentile of the kept pixels: the others are set to minus infinity, so that they sort
+    first, and the position is moved past them.
+    """
+    n = lin.shape[-3] * lin.shape[-2]
+    if w is None:
+        return _sorted_at(xp, lin, (n - 1) * q / 100.0)
+    x = xp.where(w[..., None] > 0, lin, -math.inf)
+    kept = np.asarray(kept)
+    if kept.ndim == 0 or np.all(kept == kept.flat[0]):
+        k = int(kept.flat[0])
+        return _sorted_at(xp, x, (n - k) + (k - 1) * q / 100.0)
+    batch = tuple(lin.shape[:-3])
+    per = [
+        _sorted_at(xp, x[i], (n - int(kept[i])) + (int(kept[i]) - 1) * q / 100.0)
+        for i in np.ndindex(batch)
+    ]
+    return xp.reshape(xp.stack(per, axis=0), (*batch, 3))
+
+
+def _sorted_at(xp: Any, lin: Any, pos: float) -> Any:
+    """Per channel, the value at fractional position ``pos`` of the pixels sorted."""
     if is_dask_namespace(xp):
-        return _percentile_dask(lin, q)
+        return _sorted_at_dask(lin, pos)
     s = xp.sort(_flat(xp, lin), axis=-2)
     n = s.shape[-2]
-    pos = (n - 1) * q / 100.0
     lo = math.floor(pos)
     hi = min(lo + 1, n - 1)
     frac = pos - lo
     return s[..., lo, :] * (1.0 - frac) + s[..., hi, :] * frac
 
 
-def _percentile_dask(lin: Any, q: float) -> Any:
+def _sorted_at_dask(lin: Any, pos: float) -> Any:
     """Compute the exact percentile of a Dask image from one ``topk`` reduction.
 
     The sorted values at ``lo`` and ``lo + 1`` are the ``(n - lo)``-th and
@@ -189,7 +219,6 @@ def _percentile_dask(lin: Any, q: float) -> Any:
     shape = tuple(lin.shape)
     n = shape[-3] * shape[-2]
     flat = da.reshape(lin, (*shape[:-3], n, 3), merge_chunks=True)
-    pos = (n - 1) * q / 100.0
     lo = math.floor(pos)
     hi = min(lo + 1, n - 1)
     frac = pos - lo
@@ -225,14 +254,32 @@ def _smooth(xp: Any, x: Any, w: list[float], axis: int) -> Any:
     return out
 
 
-def _gray_edge(xp: Any, lin: Any, p: float, sigma: float) -> Any:
+def _blur(xp: Any, x: Any, sigma: float) -> Any:
+    return _gauss_smooth(xp, _gauss_smooth(xp, x, sigma, -3), sigma, -2)
+
+
+def _gray_edge(xp: Any, lin: Any, p: float, sigma: float, w: Any = None) -> Any:
     x = lin
-    if sigma > 0:
-        x = _gauss_smooth(xp, _gauss_smooth(xp, x, sigma, -3), sigma, -2)
+    if sigma > 0 and w is None:
+        x = _blur(xp, x, sigma)
+    elif sigma > 0:
+        # normalised convolution: a kept pixel's blur is the weighted mean of the kept pixels
+        # about it, so that the left-out ones (a chart set to black, clipped highlights) do
+        # not bleed into it and make edges of their own
+        den = _blur(xp, w[..., None], sigma)
+        x = _blur(xp, x * w[..., None], sigma) / xp.where(den > 0, den, 1.0)
     gy = (x[..., 2:, 1:-1, :] - x[..., :-2, 1:-1, :]) * 0.5
     gx = (x[..., 1:-1, 2:, :] - x[..., 1:-1, :-2, :]) * 0.5
     mag = xp.sqrt(gx * gx + gy * gy)
-    return _minkowski(xp, mag, p)
+    if w is not None:  # a derivative is kept when its whole stencil is
+        w = (
+            w[..., 1:-1, 1:-1]
+            * w[..., :-2, 1:-1]
+            * w[..., 2:, 1:-1]
+            * w[..., 1:-1, :-2]
+            * w[..., 1:-1, 2:]
+        )
+    return _minkowski(xp, mag, p, w)
 
 
 def _pixel_mean(xp: Any, x: Any) -> Any:
@@ -250,10 +297,23 @@ def _pixel_mean(xp: Any, x: Any) -> Any:
     return xp.mean(_flat(xp, x), axis=-2)
 
 
-def _minkowski(xp: Any, x: Any, p: float) -> Any:
-    if p == 1.0:
+def _masked_mean(xp: Any, x: Any, w: Any) -> Any:
+    """Per-channel mean over the pixels of (..., H, W, C) whose weight ``w`` (..., H, W) is 1.
+
+    ``w`` is None (every pixel) or 0/1 in ``x``'s dtype: the mean over all pixels of
+    ``x w`` divided by the share of pixels kept (both means accumulated as
+    :func:`_pixel_mean` does), 0 where no pixel is kept.
+    """
+    if w is None:
         return _pixel_mean(xp, x)
-    return _pixel_mean(xp, x**p) ** (1.0 / p)
+    share = _pixel_mean(xp, w[..., None])
+    return _pixel_mean(xp, x * w[..., None]) / xp.where(share > 0, share, 1.0)
+
+
+def _minkowski(xp: Any, x: Any, p: float, w: Any = None) -> Any:
+    if p == 1.0:
+        return _masked_mean(xp, x, w)
+    return _masked_mean(xp, x**p, w) ** (1.0 / p)
 
 
 def _manual(xp: Any, like: Any, illuminant: Any, cct: float | None, space: str) -> Any:
@@ -384,6 +444,7 @@ def estimate_illuminant(
     illuminant: str | ArrayLike | None = None,
     cct: float | None = None,
     space: str = "srgb",
+    mask: ArrayLike | None = None,
     channel_axis: int = -1,
 ) -> Array:
     r"""Estimate the illuminant's colour in linear RGB from an image (see the module notes).
@@ -415,6 +476,14 @@ def estimate_illuminant(
         Robertson 1968, from 1667 K).
     space : str
         ``manual``: the RGB space of the image (its primaries convert the white to RGB).
+    mask : array_like of bool, shape (H, W) or (..., H, W), optional
+        The pixels to measure the light by (True); the others (a colour chart, clipped
+        highlights, a frame) are left out of every estimate: of the means and the percentile,
+        of ``gray_edge``'s blur (a normalised convolution) and of its derivatives (a
+        derivative whose stencil touches a left-out pixel), of the candidates of
+        ``grayness_index`` and ``pca``. The colour-constancy sets' convention: the chart and
+        the pixels at the sensor's saturation in some channel left out, e.g.
+        ``mask=raw.max(axis=-1) < saturation``. None: every pixel.
     channel_axis : int
         Deprecated (removed in imageform 0.3.0): images are channels-last everywhere; move
         the channels last first (``numpy.moveaxis(image, axis, -1)``).
@@ -428,7 +497,9 @@ def estimate_illuminant(
     ------
     DegenerateConfigurationError
         ``grayness_index`` / ``pca``: no pixel is a candidate (a flat, clipped or black
-        image): nothing to measure the light by.
+        image): nothing to measure the light by. ``mask`` keeps no pixel.
+    InvalidInputError
+        ``mask`` is not booleans of the image's height and width.
 
     References
     ----------
@@ -450,7 +521,7 @@ def estimate_illuminant(
     m, percentile = _method(method, percentile)
     _check_params(m, percentile, p, sigma, illuminant, cct)
     xp, lin, _ = _linear(image, transfer, channel_axis)
-    return _estimate(xp, lin, m, percentile, p, sigma, illuminant, cct, space)
+    return _estimate(xp, lin, m, percentile, p, sigma, illuminant, cct, space, mask)
 
 
 def _estimate(
@@ -463,7 +534,9 @@ def _estimate(
     illuminant: Any,
     cct: float | None,
     space: str,
+    mask: Any = None,
 ) -> Any:
+    extra = {} if mask is None or m == "manual" else _weights(xp, lin, mask)
     return WHITE_BALANCE_METHODS[m](
         xp,
         lin,
@@ -473,25 +546,64 @@ def _estimate(
         illuminant=illuminant,
         cct=cct,
         space=space,
+        **extra,
     )
 
 
-def _est_gray_world(xp: Any, lin: Any, **_: Any) -> Any:
-    return _pixel_mean(xp, lin)
+def _weights(xp: Any, lin: Any, mask: Any) -> dict[str, Any]:
+    """Check ``mask`` against the image; its 0/1 weights in the image's namespace, and counts.
+
+    The mask is booleans (or 0/1) of shape (H, W), or (..., H, W) broadcasting to the
+    image's batch; an image of a batch with no pixel kept is refused.
+    """
+    shape = tuple(lin.shape[:-1])
+    try:
+        mk = np.asarray(mask)
+    except (TypeError, ValueError):  # not an array NumPy can read: refused below
+        mk = None
+    if mk is None or mk.dtype.kind not in "biu" or mk.ndim < 2 or mk.ndim > len(shape):
+        raise InvalidInputError(
+            f"expected mask as booleans of shape (H, W) = {shape[-2:]}, got {describe(mask)}"
+        )
+    try:
+        mk = np.broadcast_to(mk != 0, shape)
+    except ValueError:
+        raise InvalidInputError(
+            f"expected mask of shape (H, W) = {shape[-2:]} (or the image's batch), got "
+            f"shape {mk.shape}"
+        ) from None
+    kept = mk.sum(axis=(-2, -1))
+    if not np.all(kept > 0):
+        raise DegenerateConfigurationError(
+            "mask keeps no pixel of the image (of an image of the batch): nothing to measure "
+            "the light by"
+        )
+    w = np.ascontiguousarray(mk, dtype=np.dtype(str(lin.dtype).split(".")[-1]))
+    if is_dask_namespace(xp):
+        import dask.array as da
+
+        return {"w": da.from_array(w, chunks=lin.chunks[:-1]), "kept": kept}
+    return {"w": xp.asarray(w, device=device_of(lin)), "kept": kept}
 
 
-def _est_white_patch(xp: Any, lin: Any, *, percentile: float, **_: Any) -> Any:
-    return _percentile(xp, lin, float(percentile))
+def _est_gray_world(xp: Any, lin: Any, *, w: Any = None, **_: Any) -> Any:
+    return _masked_mean(xp, lin, w)
 
 
-def _est_shades_of_gray(xp: Any, lin: Any, *, p: float, **_: Any) -> Any:
-    return _minkowski(xp, lin, float(p))
+def _est_white_patch(
+    xp: Any, lin: Any, *, percentile: float, w: Any = None, kept: Any = None, **_: Any
+) -> Any:
+    return _percentile(xp, lin, float(percentile), w, kept)
 
 
-def _est_gray_edge(xp: Any, lin: Any, *, p: float, sigma: float, **_: Any) -> Any:
+def _est_shades_of_gray(xp: Any, lin: Any, *, p: float, w: Any = None, **_: Any) -> Any:
+    return _minkowski(xp, lin, float(p), w)
+
+
+def _est_gray_edge(xp: Any, lin: Any, *, p: float, sigma: float, w: Any = None, **_: Any) -> Any:
     if lin.shape[-3] < 3 or lin.shape[-2] < 3:
         raise InvalidInputError("gray_edge needs an image of at least 3 x 3 pixels")
-    return _gray_edge(xp, lin, float(p), float(sigma))
+    return _gray_edge(xp, lin, float(p), float(sigma), w)
 
 
 #: ``grayness_index``: a pixel with a channel at or above this fraction of that channel's
@@ -510,25 +622,27 @@ GI_WINDOW = 7
 _PCA_ITERATIONS = 60
 
 
-def _unclipped(xp: Any, lin: Any) -> tuple[Any, Any]:
+def _unclipped(xp: Any, lin: Any, w: Any = None) -> tuple[Any, Any]:
     """Find the pixels with no channel clipped nor black, and each channel's floor.
 
     Clipped and black are :data:`GI_CLIP` and :data:`GI_DARK` of each channel's largest value
     (so that channel gains do not change them); the floor is ``GI_DARK`` of the largest
     value, at least the dtype's smallest normal number.
     """
-    top = xp.max(lin, axis=(-3, -2), keepdims=True)
+    top = xp.max(lin if w is None else lin * w[..., None], axis=(-3, -2), keepdims=True)
     tiny = float(np.finfo(np.dtype(str(lin.dtype).split(".")[-1])).tiny)
     ok = xp.all((lin > GI_DARK * top) & (lin < GI_CLIP * top), axis=-1)
+    if w is not None:
+        ok = ok & (w > 0)
     return ok, xp.maximum(GI_DARK * top, tiny)
 
 
-def _log_laplacian(xp: Any, lin: Any, sigma: float) -> tuple[Any, Any]:
+def _log_laplacian(xp: Any, lin: Any, sigma: float, w: Any = None) -> tuple[Any, Any]:
     """Return the Laplacian of the smoothed log image on the interior pixels, and candidates.
 
     A candidate has no channel clipped or too dark in its stencil, and some contrast.
     """
-    ok, floor = _unclipped(xp, lin)
+    ok, floor = _unclipped(xp, lin, w)
     x = xp.log(xp.maximum(lin, floor))
     if sigma > 0:
         x = _gauss_smooth(xp, _gauss_smooth(xp, x, sigma, -3), sigma, -2)
@@ -552,8 +666,8 @@ def _log_laplacian(xp: Any, lin: Any, sigma: float) -> tuple[Any, Any]:
     return lap, ok
 
 
-def _grayness_index(xp: Any, lin: Any, q: float, sigma: float) -> Any:
-    lap, ok = _log_laplacian(xp, lin, sigma)
+def _grayness_index(xp: Any, lin: Any, q: float, sigma: float, w: Any = None) -> Any:
+    lap, ok = _log_laplacian(xp, lin, sigma, w)
     d_r = lap[..., 0] - lap[..., 1]
     d_b = lap[..., 2] - lap[..., 1]
     w = xp.astype(ok, lap.dtype)[..., None]
@@ -579,8 +693,8 @@ def _kth_smallest(xp: Any, x: Any, q: float) -> Any:
     return xp.sort(flat, axis=-1)[..., k - 1]
 
 
-def _pca(xp: Any, lin: Any, q: float) -> Any:
-    ok, _ = _unclipped(xp, lin)
+def _pca(xp: Any, lin: Any, q: float, w: Any = None) -> Any:
+    ok, _ = _unclipped(xp, lin, w)
     mean = _pixel_mean(xp, lin * xp.astype(ok, lin.dtype)[..., None])
     t = xp.sum(lin * mean[..., None, None, :], axis=-1)  # projection on the mean colour
     lo = _kth_smallest(xp, xp.where(ok, t, math.inf), q)
@@ -599,10 +713,12 @@ def _pca(xp: Any, lin: Any, q: float) -> Any:
     return v
 
 
-def _est_grayness_index(xp: Any, lin: Any, *, percentile: float, sigma: float, **_: Any) -> Any:
+def _est_grayness_index(
+    xp: Any, lin: Any, *, percentile: float, sigma: float, w: Any = None, **_: Any
+) -> Any:
     if lin.shape[-3] < 3 or lin.shape[-2] < 3:
         raise InvalidInputError("grayness_index needs an image of at least 3 x 3 pixels")
-    e = _grayness_index(xp, lin, float(percentile), float(sigma))
+    e = _grayness_index(xp, lin, float(percentile), float(sigma), w)
     if not is_dask_namespace(xp) and any_value(~(xp.max(e, axis=-1) > 0), xp):
         raise DegenerateConfigurationError(
             "grayness_index: no pixel of the image has contrast without a clipped or black "
@@ -612,8 +728,8 @@ def _est_grayness_index(xp: Any, lin: Any, *, percentile: float, sigma: float, *
     return e
 
 
-def _est_pca(xp: Any, lin: Any, *, percentile: float, **_: Any) -> Any:
-    e = _pca(xp, lin, float(percentile))
+def _est_pca(xp: Any, lin: Any, *, percentile: float, w: Any = None, **_: Any) -> Any:
+    e = _pca(xp, lin, float(percentile), w)
     if not is_dask_namespace(xp) and any_value(~(xp.max(e, axis=-1) > 0), xp):
         raise DegenerateConfigurationError(
             "pca: no pixel of the image without a clipped or black channel to measure the "
@@ -659,6 +775,7 @@ def white_balance(
     cct: float | None = None,
     space: str = "srgb",
     clip: bool = False,
+    mask: ArrayLike | None = None,
     channel_axis: int = -1,
 ) -> WhiteBalanceResult:
     r"""White-balance an image: estimate the illuminant, divide it out in linear light.
@@ -681,6 +798,9 @@ def white_balance(
     clip : bool
         Clip the balanced linear values to [0, 1] before encoding (only when asked: the gains
         can push highlights above 1).
+    mask : array_like of bool, shape (H, W) or (..., H, W), optional
+        The pixels the light is estimated from (see :func:`estimate_illuminant`); the gains
+        apply to every pixel.
     channel_axis : int
         Deprecated (removed in imageform 0.3.0): images are channels-last everywhere; move
         the channels last first (``numpy.moveaxis(image, axis, -1)``).
@@ -714,7 +834,7 @@ def white_balance(
     norm = check_name(normalize, ("mean", "green"), "gain normalisation", "normalize")
     _check_params(m, percentile, p, sigma, illuminant, cct)
     xp, lin, tname = _linear(image, transfer, channel_axis)
-    gains = _gains(xp, lin, m, norm, percentile, p, sigma, illuminant, cct, space)
+    gains = _gains(xp, lin, m, norm, percentile, p, sigma, illuminant, cct, space, mask)
     out = _apply(xp, lin, gains, tname, as_bool(clip, "clip"))
     return WhiteBalanceResult._make((out, gains))  # from checked input: no second pass
 
@@ -730,8 +850,9 @@ def _gains(
     illuminant: Any,
     cct: float | None,
     space: str,
+    mask: Any = None,
 ) -> Any:
-    e = _estimate(xp, lin, m, percentile, p, sigma, illuminant, cct, space)
+    e = _estimate(xp, lin, m, percentile, p, sigma, illuminant, cct, space, mask)
     why = _why_zero(m, float(percentile))
     if is_dask_namespace(xp):
         e = e.map_blocks(_check_estimate, why, dtype=e.dtype)  # lazily: raises at compute
@@ -762,6 +883,7 @@ def white_balance_gains(
     illuminant: str | ArrayLike | None = None,
     cct: float | None = None,
     space: str = "srgb",
+    mask: ArrayLike | None = None,
 ) -> Array:
     """Return the gains :func:`white_balance` finds for ``image`` (not applied).
 
@@ -774,7 +896,7 @@ def white_balance_gains(
     a = image if isinstance(image, np.ndarray) else None
     if a is None or a.ndim != 3 or a.shape[0] < 2:
         xp, lin, _ = _linear(image, transfer, -1)
-        return _gains(xp, lin, m, norm, percentile, p, sigma, illuminant, cct, space)
+        return _gains(xp, lin, m, norm, percentile, p, sigma, illuminant, cct, space, mask)
     # the linear image made a band of rows at a time (the same values: decoding is pixel by
     # pixel), so that decoding's float64 temporaries never span the whole image
     rows = max(1, 2**20 // max(a.shape[1], 1))
@@ -784,7 +906,7 @@ def white_balance_gains(
         if lin is None:
             lin = np.empty(a.shape, dtype=band.dtype)
         lin[r0 : r0 + rows] = band
-    return _gains(xp, lin, m, norm, percentile, p, sigma, illuminant, cct, space)
+    return _gains(xp, lin, m, norm, percentile, p, sigma, illuminant, cct, space, mask)
 
 
 def apply_white_balance_gains(
