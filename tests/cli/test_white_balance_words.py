@@ -131,3 +131,75 @@ def test_a_white_outside_the_gamut_is_said(
     assert "1666.67 K lies outside srgb's gamut" in line and "from 1900 K" in line, line
     assert not out.exists()
     assert main([*args, "--cct", "1900"]) == 0
+
+
+def _clipped_photo(tmp_path: Path) -> tuple[Path, np.ndarray]:
+    """A grey world tinted 0.5/0.4/0.3 in linear light with two clipped highlights."""
+    from imageform.color import convert
+    from imageform.io import write_image
+
+    rng = np.random.default_rng(2)
+    lin = rng.random((128, 128, 3)) * [0.5, 0.4, 0.3]
+    lin[:40, :40] = [1.0, 1.0, 0.9]
+    lin[100:, 100:] = 1.0
+    img = (np.clip(convert(lin, "linear_srgb", "srgb"), 0, 1) * 255).round().astype(np.uint8)
+    path = tmp_path / "clip.png"
+    write_image(path, img)
+    return path, lin
+
+
+def _gains(capsys: pytest.CaptureFixture[str]) -> np.ndarray:
+    import json
+
+    return np.asarray(json.loads(capsys.readouterr().out)["gains"])
+
+
+def test_mask_leaves_the_clipped_highlights_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--mask unclipped and a mask image give the light of the kept pixels (the tint's
+    0.8/1/1.33 gains); without a mask the highlights pull the gains towards white."""
+    from imageform.io import write_image
+
+    src, _ = _clipped_photo(tmp_path)
+    out = tmp_path / "o.png"
+    args = ["white-balance", str(src), "-o", str(out), "--json", "--force"]
+    truth = np.array([0.5, 0.4, 0.3]).mean() / np.array([0.5, 0.4, 0.3])
+    assert main(args) == 0
+    plain = _gains(capsys)
+    assert main([*args, "--mask", "unclipped"]) == 0
+    unclipped = _gains(capsys)
+    np.testing.assert_allclose(unclipped, truth, rtol=0.01)
+    assert np.abs(plain - truth).max() > 5 * np.abs(unclipped - truth).max()
+    m = np.zeros((128, 128), np.uint8)
+    m[40:100, :] = 255  # rows holding no highlight
+    write_image(tmp_path / "m.png", m)
+    assert main([*args, "--mask", str(tmp_path / "m.png")]) == 0
+    np.testing.assert_allclose(_gains(capsys), truth, rtol=0.02)  # 7680 noisy 8-bit pixels
+    assert main([*args, "--mask", "FOV"]) == 0  # no black surround: about every pixel
+    capsys.readouterr()
+
+
+@pytest.mark.parametrize(
+    ("extra", "code", "words"),
+    [
+        (["--mask", "nope.png"], 1, "--mask nope.png is no file"),
+        (["--method", "manual", "--cct", "3000", "--mask", "unclipped"], 2, "--mask goes with"),
+        (["--method", "chart", "--mask", "fov"], 2, "--mask goes with"),
+    ],
+)
+def test_bad_masks(
+    extra: list[str], code: int, words: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from imageform.io import write_image
+
+    src, _ = _clipped_photo(tmp_path)
+    out = tmp_path / "o.png"
+    assert main(["white-balance", str(src), "-o", str(out), *extra]) == code
+    (line,) = capsys.readouterr().err.splitlines()
+    assert words in line, line
+    assert not out.exists()
+    small = tmp_path / "small.png"
+    write_image(small, np.full((8, 8), 255, np.uint8))
+    assert main(["white-balance", str(src), "-o", str(out), "--mask", str(small)]) == 1
+    assert "is 8 x 8 px, the image 128 x 128 px" in capsys.readouterr().err

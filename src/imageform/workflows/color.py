@@ -431,11 +431,29 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
         output=True,
     )
 
+    mask: str = option(
+        "none",
+        help="The pixels the light is measured by (the estimating methods): none (every "
+        "pixel), unclipped (no channel at the top code: clipped highlights left out, as the "
+        "colour-constancy sets do), fov (an endoscope's field of view, without its black "
+        "surround) or a mask image of the image's size (non-zero: use). The gains apply to "
+        "every pixel.",
+        metavar="none|unclipped|fov|FILE",
+    )
+
     def check(self) -> None:
-        """Check --illuminant, and that --chart and --overlay come with --method chart only."""
+        """Check --illuminant, --mask, and that --chart and --overlay go with --method chart."""
         super().check()
         if self.illuminant is not None:
             _check_illuminant(self.illuminant)
+        key = str(self.mask).strip()
+        object.__setattr__(self, "mask", key.lower() if key.lower() in _WB_MASKS else key)
+        method = normalize_choice(self.method, _WB_METHODS, "--method")
+        if self.mask != "none" and method in ("manual", "chart"):
+            raise InvalidInputError(
+                f"--mask goes with the methods that measure the light in the image, not "
+                f"--method {self.method} (a given white or the chart's grey patches)"
+            )
         if self.chart is not None:
             object.__setattr__(self, "chart", Path(self.chart))
         method = normalize_choice(self.method, _WB_METHODS, "--method")
@@ -459,6 +477,43 @@ class WhiteBalanceOptions(ImageIn, ImageOut, OnDevice):
             "illuminant": self.illuminant,
             "cct": self.cct,
         }
+
+
+#: ``white-balance --mask``'s words (anything else is a mask image's path).
+_WB_MASKS = ("none", "unclipped", "fov")
+
+
+def white_balance_mask(image: Any, mask: str, path: Path, read_mask: Any) -> Any:
+    """Return the pixels ``--mask`` keeps for the illuminant estimate (None: every pixel).
+
+    ``unclipped``: no channel at the top of the sample's range (the integer type's largest
+    code, 1.0 for floats); ``fov``: :func:`imageform.geometry.field_of_view_mask` of the
+    image; otherwise ``read_mask(path)`` gives the mask image (non-zero: use).
+    """
+    import numpy as np
+
+    if mask == "none":
+        return None
+    a = np.asarray(image)
+    h, w = a.shape[:2]
+    if mask == "unclipped":
+        top = np.iinfo(a.dtype).max if a.dtype.kind == "u" else 1.0
+        keep = np.all(a[..., :3] < top, axis=-1)
+        if not keep.any():
+            raise InvalidInputError(f"{path}: every pixel has a clipped channel (--mask unclipped)")
+        return keep
+    if mask == "fov":
+        from imageform.geometry import field_of_view_mask
+
+        return np.asarray(field_of_view_mask(a))
+    from imageform.workflows._images import mask_of
+
+    src = Path(mask)
+    if not src.is_file():
+        raise InvalidInputError(
+            f"--mask {mask} is no file (give none, unclipped, fov or a mask image)"
+        )
+    return mask_of(read_mask(src), src, h, w, "the image", "no pixel would be used")
 
 
 def declared_encoding(space: str | None) -> tuple[str, str]:
@@ -537,8 +592,11 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
         )
 
         # the estimate reads the whole image on the CPU; the gains are applied on the device
+        keep = white_balance_mask(img, opts.mask, image, lambda p: read(p, opts))
         gains = np.asarray(
-            white_balance_gains(img, opts.method, transfer=transfer, space=space, **opts.params())
+            white_balance_gains(
+                img, opts.method, transfer=transfer, space=space, mask=keep, **opts.params()
+            )
         )
         fn: Any = lambda band: apply_white_balance_gains(band, gains, transfer=transfer)  # noqa: E731
         if opts.device == "cuda":
@@ -551,6 +609,7 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
         "input": image,
         "output": out,
         "method": opts.method,
+        "mask": opts.mask,
         "gains": g,
         "values_clipped": n_out,
         "device": opts.device,
