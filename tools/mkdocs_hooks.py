@@ -144,6 +144,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "twoview-real": "benchmarks/check_twoview_real.py",
     "twoview-seeds": "benchmarks/check_twoview_real.py",
     "vision": "benchmarks/bench_vision.py",
+    "vp-fresh": "benchmarks/check_vp_fresh.py",
     "vp-lsd": "benchmarks/check_vp_lsd.py",
     "vp-manhattan": "benchmarks/check_vp_manhattan.py",
     "vp-real": "benchmarks/check_vp_real.py",

@@ -113,6 +113,12 @@ def test_vanishing_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     assert abs(payload["K"][0][0] - 700.0) < 21.0
     with Image.open(out) as ov:
         assert ov.size == (768, 512) and ov.mode == "RGB"
+    # --max-size: segments from a copy half the size, the answers in the photograph's pixels
+    assert main(["vanishing", str(src), "--max-size", "384", "--json"]) == 0
+    small = json.loads(capsys.readouterr().out)
+    assert small["perspective"] == 3 and abs(small["K"][0][0] - 700.0) < 21.0
+    assert main(["vanishing", str(src), "--max-size", "8"]) == 2
+    assert "--max-size" in capsys.readouterr().err
     assert main(["vanishing", str(src), "--out", str(out)]) == 1  # exists, no --force
     bad = tmp_path / "bad.png"
     bad.write_bytes(b"not an image")

@@ -49,6 +49,13 @@ class VanishingOptions(ImageIn):
     seed: int = option(
         0, help="RANSAC seed, an integer (rng= in Python): results are reproducible.", minimum=0
     )
+    max_size: int | None = option(
+        None,
+        help="Find the line segments on a copy at most N px on its long side (the answers are "
+        "in the photograph's pixels); default: the photograph as it is.",
+        metavar="N",
+        minimum=16,
+    )
     principal_point: _PrincipalPoint = option(
         "center",
         # "centre" and "orthocentre": the spellings before issue 30, still accepted
@@ -222,7 +229,7 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             opts.principal_point, opts.principal_point
         )
     ahead.start("vanishing")  # a first run: its kernels compiled on two cores
-    res = detect_vanishing_points(arr, rng=opts.seed, principal_point=pp)
+    res = detect_vanishing_points(arr, rng=opts.seed, principal_point=pp, max_size=opts.max_size)
     if len(res.segments) < 2:
         # the library answers "none found" (an empty set); the command fails, as before
         raise DegenerateConfigurationError(
