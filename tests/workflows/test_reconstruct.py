@@ -270,6 +270,18 @@ def test_bad_input_is_one_line_and_writes_nothing(
     other = write_camera(tmp_path / "other.toml", Camera(K, image_size=(320, 240)))
     err = _one_line_error(["reconstruct", str(few), "--camera", str(other)], out, capsys)
     assert "is for 320 x 240 px images" in err and "64 x 48 px frames" in err
+    # --refine-distortion with a lens it cannot refine (a fisheye): before any frame is read
+    from imageform.geometry import KannalaBrandt
+
+    fish = write_camera(
+        tmp_path / "fish.toml",
+        Camera(K, distortion=KannalaBrandt(0.1, 0, 0, 0), image_size=(64, 48)),
+    )
+    err = _one_line_error(
+        ["reconstruct", str(few), "--camera", str(fish), "--refine-distortion"], out, capsys
+    )
+    assert "fish.toml: --refine-distortion refines one radial term k1" in err
+    assert "KannalaBrandt" in err
     # an existing output: refused without --force; --force never replaces a user's folder
     out.mkdir()
     (out / "mine.txt").write_text("keep")

@@ -369,6 +369,16 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         out, run.outputs.force, _MARKERS, "reconstruct", "a previous reconstruction"
     )
     cam = None if opts.camera is None else read_camera(opts.camera).camera
+    lens0 = None if cam is None else cam.distortion
+    if opts.refine_distortion and lens0 is not None:
+        coeffs = tuple(getattr(lens0, "coeffs", ()))
+        if type(lens0).__name__ != "BrownConrady" or any(coeffs[1:]):
+            raise InvalidInputError(
+                f"{opts.camera}: --refine-distortion refines one radial term k1 (COLMAP's "
+                f"SIMPLE_RADIAL), the camera file's lens is {type(lens0).__name__} "
+                f"{', '.join(f'{c:g}' for c in coeffs)}: give a camera without distortion or "
+                "with brown_conrady k1 alone"
+            )
     size = (
         None
         if cam is None or cam.image_size is None
