@@ -113,7 +113,7 @@ def test_focal_length_refined_with_the_poses(kernel: bool) -> None:
     np.testing.assert_allclose(num, (uv - K[:2, 2]) / 500, rtol=0, atol=1e-9)
     K0 = K.copy()
     K0[:2, :2] *= 1.3
-    R1, t1, X1, K1 = sfm_mod._schur_lm(
+    R1, t1, X1, K1, _ = sfm_mod._schur_lm(
         K0, R, t, X, ci, pi, uv, fixed, 0.0, 100, kernel=kernel, focal=True
     )
     assert K1[0, 0] == pytest.approx(500.0, rel=1e-4) and K1[1, 1] == K1[0, 0]
@@ -121,7 +121,7 @@ def test_focal_length_refined_with_the_poses(kernel: bool) -> None:
     Xc1 = np.einsum("mij,mj->mi", R1[ci], X1[pi]) + t1[ci]
     assert np.abs((Xc1 @ K1.T)[:, :2] / Xc1[:, 2:] - uv).max() < 1e-3
     # without focal: K returned as given, and the views do not fit
-    R2, t2, X2, K2 = sfm_mod._schur_lm(K0, R, t, X, ci, pi, uv, fixed, 0.0, 100, kernel=kernel)
+    R2, t2, X2, K2, _ = sfm_mod._schur_lm(K0, R, t, X, ci, pi, uv, fixed, 0.0, 100, kernel=kernel)
     np.testing.assert_array_equal(K2, K0)
     Xc2 = np.einsum("mij,mj->mi", R2[ci], X2[pi]) + t2[ci]
     assert np.abs((Xc2 @ K0.T)[:, :2] / Xc2[:, 2:] - uv).max() > 0.1
@@ -218,3 +218,68 @@ def test_bundle_adjust_bad_inputs() -> None:
         bundle_adjust(K[:2], R, t, X, ci, pi, uv)
     with pytest.raises(InvalidInputError, match=r"t \(n, 3\)"):
         bundle_adjust(K, R, t[:-1], X, ci, pi, uv)
+
+
+def test_radial_lens_derivatives_against_central_differences() -> None:
+    """COLMAP's SIMPLE_RADIAL (``_radial``): the lens's map A, d/df and d/dk1 as the
+    projection's central differences (a point's and a pose's derivatives go through A)."""
+    (K, R, t, X, ci, pi, _, _, _), _ = _problem(False)
+    k1 = -0.2
+
+    def project(K: np.ndarray, k1: float, X: np.ndarray) -> np.ndarray:
+        p, _ = sfm_mod._project_obs(K, R[ci], t[ci], X[pi])
+        return sfm_mod._radial(K, k1, p)[0]
+
+    _, A, du_df, du_dk = sfm_mod._radial(K, k1, sfm_mod._project_obs(K, R[ci], t[ci], X[pi])[0])
+    h = 1e-6
+    num_k = (project(K, k1 + h, X) - project(K, k1 - h, X)) / (2 * h)
+    np.testing.assert_allclose(du_dk, num_k, rtol=0, atol=1e-6 * np.abs(du_dk).max())
+    hf = 1e-3
+    Kp, Km = K.copy(), K.copy()
+    Kp[:2, :2] *= (K[0, 0] + hf) / K[0, 0]
+    Km[:2, :2] *= (K[0, 0] - hf) / K[0, 0]
+    num_f = (project(Kp, k1, X) - project(Km, k1, X)) / (2 * hf)
+    np.testing.assert_allclose(du_df, num_f, rtol=0, atol=1e-8)
+    # d u / d X = A (d pinhole / d X): every view of point 0, each coordinate
+    views = np.flatnonzero(pi == 0)
+    Xc = np.einsum("mij,mj->mi", R[ci], X[pi]) + t[ci]
+    for j in range(3):
+        Xp, Xm = X.copy(), X.copy()
+        Xp[0, j] += 1e-6
+        Xm[0, j] -= 1e-6
+        num = (project(K, k1, Xp) - project(K, k1, Xm))[views] / 2e-6
+        for v, o in enumerate(views):
+            x, y, z = Xc[o]
+            f = K[0, 0]
+            Jp = np.array([[f / z, 0, -f * x / z**2], [0, f / z, -f * y / z**2]]) @ R[ci[o]]
+            np.testing.assert_allclose(A[o] @ Jp[:, j], num[v], rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("kernel", PATHS)
+def test_focal_length_and_radial_term_refined_with_the_poses(kernel: bool) -> None:
+    """Views through a barrel lens (k1 -0.2, 500 px), started at 650 px and k1 0: both
+    found (the views fit to 1e-3 px); the bound refuses a k1 that folds the image."""
+    (K, R, t, X, ci, pi, _, fixed, _), _ = _problem(False)
+    p, _ = sfm_mod._project_obs(K, R[ci], t[ci], X[pi])
+    uv = sfm_mod._radial(K, -0.2, p)[0]
+    K0 = K.copy()
+    K0[:2, :2] *= 1.3
+    R1, t1, X1, K1, k1 = sfm_mod._schur_lm(
+        K0, R, t, X, ci, pi, uv, fixed, 0.0, 200, kernel=kernel, focal=True, radial=0.0
+    )
+    assert K1[0, 0] == pytest.approx(500.0, rel=1e-5) and k1 == pytest.approx(-0.2, abs=1e-5)
+    np.testing.assert_array_equal(K1[:2, 2], K[:2, 2])
+    p1, _ = sfm_mod._project_obs(K1, R1[ci], t1[ci], X1[pi])
+    assert np.abs(sfm_mod._radial(K1, k1, p1)[0] - uv).max() < 1e-3
+    # k1 alone (f held at the truth) converges too
+    *_, k1b = sfm_mod._schur_lm(K, R, t, X, ci, pi, uv, fixed, 0.0, 200, kernel=kernel, radial=0.1)
+    assert k1b == pytest.approx(-0.2, abs=1e-5)
+    # the farthest view's normalised radius: |k1| r^2 <= 0.3 holds any step
+    xo = (uv - K[:2, 2]) / 500.0
+    r2max = float(np.max(np.sum(xo * xo, axis=1)))
+    uv_far = sfm_mod._radial(K, -0.9 / r2max, p)[0]  # a lens beyond the bound
+    *_, k1c = sfm_mod._schur_lm(
+        K, R, t, X, ci, pi, uv_far, fixed, 0.0, 50, kernel=kernel, radial=0.0
+    )
+    xf = (uv_far - K[:2, 2]) / 500.0
+    assert abs(k1c) * float(np.max(np.sum(xf * xf, axis=1))) <= 0.3 + 1e-12

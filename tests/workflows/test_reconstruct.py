@@ -13,7 +13,7 @@ import pytest
 import imageform.geometry
 from imageform.cli import main
 from imageform.geometry import Camera, Reconstruction, rvec_to_matrix
-from imageform.io import write_camera, write_image
+from imageform.io import read_camera, write_camera, write_image
 from imageform.workflows._ply import read_points_ply, write_points_ply
 from tests import sfm_scenes
 
@@ -66,7 +66,7 @@ def run(
 def test_cameras_against_the_truth(run: tuple[Path, dict, list]) -> None:
     out, doc, truth = run
     assert sorted(p.name for p in out.iterdir()) == [
-        "cameras.csv", "metrics.json", "points.ply", "report.html",
+        "camera.toml", "cameras.csv", "metrics.json", "points.ply", "report.html",
     ]  # fmt: skip
     rows = _read(out / "cameras.csv")
     assert list(rows[0]) == [
@@ -270,6 +270,18 @@ def test_bad_input_is_one_line_and_writes_nothing(
     other = write_camera(tmp_path / "other.toml", Camera(K, image_size=(320, 240)))
     err = _one_line_error(["reconstruct", str(few), "--camera", str(other)], out, capsys)
     assert "is for 320 x 240 px images" in err and "64 x 48 px frames" in err
+    # --refine-distortion with a lens it cannot refine (a fisheye): before any frame is read
+    from imageform.geometry import KannalaBrandt
+
+    fish = write_camera(
+        tmp_path / "fish.toml",
+        Camera(K, distortion=KannalaBrandt(0.1, 0, 0, 0), image_size=(64, 48)),
+    )
+    err = _one_line_error(
+        ["reconstruct", str(few), "--camera", str(fish), "--refine-distortion"], out, capsys
+    )
+    assert "fish.toml: --refine-distortion refines one radial term k1" in err
+    assert "KannalaBrandt" in err
     # an existing output: refused without --force; --force never replaces a user's folder
     out.mkdir()
     (out / "mine.txt").write_text("keep")
@@ -449,6 +461,12 @@ def test_room_without_a_camera_file_refines_the_guess(
     assert intr["source"] == "guess" and intr["focal_px_initial"] == 384.0 and intr["refined"]
     assert intr["focal_px"] == pytest.approx(240.0, rel=0.02)
     assert "refined by bundle adjustment to f = 24" in capsys.readouterr().err
+    # the camera found, for the commands downstream: f and the radial term (the room is
+    # rendered without distortion: k1 near 0)
+    cam = read_camera(out / "camera.toml").camera
+    assert cam.K[0, 0] == pytest.approx(intr["focal_px"], rel=1e-9)
+    assert intr["distortion_refined"] and abs(intr["k1"]) < 0.02
+    assert cam.distortion is not None and cam.distortion.k1 == pytest.approx(intr["k1"])
     rows = _read(out / "cameras.csv")
     assert all(r["registered"] == "1" for r in rows)
     C_est = []
@@ -474,6 +492,30 @@ def test_refine_focal_is_asked_with_a_camera_file_or_focal(seen_K: list, tmp_pat
         assert main(["reconstruct", str(frames), *args, "-o", str(out)]) == 0
         assert seen_K[-1][2]["refine_focal"] is refine, args
         assert json.loads((out / "metrics.json").read_text())["intrinsics"]["refined"] is refine
+
+
+def test_refine_distortion_is_asked_with_a_camera_file_or_focal(
+    seen_K: list, tmp_path: Path
+) -> None:
+    """COLMAP's SIMPLE_RADIAL k1: refined without a camera file, else on --refine-distortion;
+    camera.toml holds the camera the reconstruction ends with (here the stand-in's K)."""
+    camera = write_camera(tmp_path / "cam.toml", Camera(K, image_size=(64, 48)))
+    frames = _blank_frames(tmp_path / "frames", 3)
+    runs = [
+        (["--camera", str(camera)], False),
+        (["--camera", str(camera), "--refine-distortion"], True),
+        (["--focal", "50"], False),
+        (["--focal", "50", "--refine-distortion"], True),
+        ([], True),
+    ]
+    for i, (args, refine) in enumerate(runs):
+        out = tmp_path / f"o{i}"
+        assert main(["reconstruct", str(frames), *args, "-o", str(out)]) == 0
+        assert seen_K[-1][2]["refine_distortion"] is refine, args
+        intr = json.loads((out / "metrics.json").read_text())["intrinsics"]
+        assert intr["distortion_refined"] is refine
+        written = read_camera(out / "camera.toml").camera
+        np.testing.assert_allclose(written.K, seen_K[-1][0])
 
 
 def test_a_camera_file_whose_focal_length_fits_poorly_is_flagged(

@@ -326,6 +326,10 @@ class Reconstruction:
         With ``K`` held: the focal length one more bundle adjustment finds when it refines
         it from the final poses and points (a check of the given ``K``: a note when it
         differs by more than 10 %); None when ``refine_focal`` or fewer than 3 frames.
+    distortion : distortion model or None
+        The lens of the final bundle adjustment: the one given, or with
+        ``refine_distortion`` its radial term refined (``BrownConrady(k1)``, COLMAP's
+        ``SIMPLE_RADIAL``). With ``K``, the camera to reproject the points into the frames.
     """
 
     R: F64
@@ -339,6 +343,7 @@ class Reconstruction:
     residuals_px: F64 = field(default_factory=lambda: np.zeros(0))
     K: F64 | None = None
     focal_fit_px: float | None = None
+    distortion: DistortionModel | None = None
 
 
 #: A given focal length is flagged when a bundle adjustment that refines it moves it by more
@@ -490,6 +495,39 @@ def _project_one(K: F64, R: F64, t: F64, X: F64) -> tuple[F64, F64]:
     return uv, z
 
 
+def _radial(K: F64, k1: float, proj: F64) -> tuple[F64, F64, F64, F64]:
+    r"""COLMAP's ``SIMPLE_RADIAL`` lens on pinhole pixels ``proj`` (M, 2).
+
+    .. math:: x = K_2^{-1} (p - c), \quad u = c + K_2\, (1 + k_1 \|x\|^2)\, x
+
+    (:math:`K_2` the upper left 2 x 2 of ``K``, :math:`c` its principal point; Schönberger
+    & Frahm 2016, COLMAP's ``SimpleRadialCameraModel``). Returns the image pixels ``u``,
+    the lens's local linear map :math:`A = K_2 J_d K_2^{-1}` (M, 2, 2) from pinhole to image
+    pixels, :math:`J_d = (1 + k_1 r^2) I + 2 k_1 x x^T`, by which the pinhole Jacobians of
+    a pose and a point become the image's, and the derivatives of ``u`` by :math:`f_x`
+    (``fy`` and the skew scaled alike), :math:`(u - c) / f_x`, and by :math:`k_1`,
+    :math:`K_2 x r^2` (each (M, 2)).
+    """
+    k2 = K[:2, :2]
+    c = K[:2, 2]
+    x = (proj - c) @ np.linalg.inv(k2).T
+    r2 = np.sum(x * x, axis=1)
+    d = 1.0 + k1 * r2
+    u = c + (x * d[:, None]) @ k2.T
+    jd = d[:, None, None] * np.eye(2) + 2.0 * k1 * x[:, :, None] * x[:, None, :]
+    A = k2 @ jd @ np.linalg.inv(k2)
+    du_df = (u - c) / K[0, 0]
+    du_dk = (x * r2[:, None]) @ k2.T
+    return u, A, du_df, du_dk
+
+
+#: The largest radial term :func:`_schur_lm` takes, as its displacement at the farthest
+#: view, :math:`|k_1| r_{max}^2`: beyond 1/3 a barrel term folds the image back on itself
+#: (:math:`d(r (1 + k_1 r^2)) / dr = 1 + 3 k_1 r^2`), and well before it the term trades
+#: against the focal length and the depths.
+_RADIAL_MAX = 0.3
+
+
 def _sum_blocks(idx: NDArray[np.int64], blocks: F64, n: int) -> F64:
     """Sum of the ``blocks`` (M, ...) that share an index, as (n, ...)."""
     shape = blocks.shape[1:]
@@ -605,7 +643,9 @@ def _schur_lm(
     A: F64 | None = None,
     kernel: bool | None = None,
     focal: bool = False,
-) -> tuple[F64, F64, F64, F64]:
+    radial: float | None = None,
+    refine_radial: bool = True,
+) -> tuple[F64, F64, F64, F64, float]:
     r"""Levenberg-Marquardt on the reprojection error, the points eliminated (Schur complement).
 
     Each camera moves by a rotation :math:`\exp([\omega]_\times) R` and a translation
@@ -632,16 +672,26 @@ def _schur_lm(
     ``focal``: the focal length is refined too, one for every camera (COLMAP's default
     for a camera whose focal length was guessed): ``fx``, ``fy`` and the skew scale
     together (their ratios stay), the principal point stays. Its derivative is
-    :math:`\partial u / \partial f_x = (u - c) / f_x`; it adds one row and column to the
-    reduced camera system (its coupling with each camera's 6 parameters and with each
-    point's 3, summed in NumPy beside the kernels). Returns ``R``, ``t``, ``X`` and ``K``
-    (the refined camera matrix; ``K`` itself without ``focal``).
+    :math:`\partial u / \partial f_x = (u - c) / f_x`.
+
+    ``radial`` (a float, the starting :math:`k_1`): the views ``uv`` are image pixels of
+    COLMAP's ``SIMPLE_RADIAL`` lens, :math:`u = c + K_2 (1 + k_1 r^2) x` (:func:`_radial`),
+    and its one radial term is refined, one for every camera (``A`` must be None: the lens
+    is the model's, its local map recomputed at each step); bounded by
+    :math:`|k_1| r_{max}^2 \le 0.3`, :math:`r_{max}` the farthest view's normalised radius
+    (``refine_radial`` False: the lens held at ``radial``).
+    Each refined intrinsic adds one row and column to the reduced camera system (its
+    coupling with each camera's 6 parameters and with each point's 3, summed in NumPy
+    beside the kernels). Returns ``R``, ``t``, ``X``, ``K`` (the refined camera matrix;
+    ``K`` itself without ``focal``) and :math:`k_1` (0 without ``radial``).
     """
     from scipy.linalg import cho_factor, cho_solve
 
     from imageform._backend import use_numba
     from imageform.geometry.rotations import rvec_to_matrix
 
+    if radial is not None and A is not None:
+        raise ValueError("radial and A are exclusive")  # pragma: no cover
     n, m, M = R.shape[0], X.shape[0], ci.size
     slot = -np.ones(n, np.int64)
     free = np.flatnonzero(~np.asarray(fixed, bool))
@@ -651,6 +701,8 @@ def _schur_lm(
     has = cs >= 0
     csh, pih = cs[has], pi[has]
     eye3, eye6 = np.eye(3), np.eye(6)
+    refine_k1 = radial is not None and refine_radial
+    ni = int(focal) + int(refine_k1)  # the intrinsics refined
     # W V^-1 W^T, the blocks summed over the points two free cameras share: laid out once
     if kernel is None:
         kernel = use_numba(X)
@@ -664,13 +716,33 @@ def _schur_lm(
         cs = np.ascontiguousarray(cs, np.int64)
         hpos = np.where(has, np.cumsum(has) - 1, -1).astype(np.int64)
         A_k = np.zeros((0, 2, 2)) if A is None else np.ascontiguousarray(A, np.float64)
+    if radial is not None:  # the farthest view's normalised radius, squared: the bound
+        xo = (uv - K[:2, 2]) @ np.linalg.inv(K[:2, :2]).T
+        r2max = float(np.max(np.sum(xo * xo, axis=1), initial=0.0))
+        k1_max = _RADIAL_MAX / max(r2max, 1e-12)
 
     def gram(A: F64, B: F64) -> F64:
         """Return the blocks :math:`A_m^T B_m` of two (M, 2, k) stacks."""
         return np.matmul(A.transpose(0, 2, 1), B)
 
-    def evaluate(R: F64, t: F64, X: F64, K: F64) -> tuple[F64, F64, float, F64]:
+    def evaluate(
+        R: F64, t: F64, X: F64, K: F64, k1: float
+    ) -> tuple[F64, F64, float, F64, F64 | None, F64]:
+        """Residuals, their squares, the cost, the weights, the lens's map and d/d(f, k1)."""
         proj, z = _project_obs(K, R[ci], t[ci], X[pi])
+        lensmap = A
+        Ji = np.zeros((M, 2, ni))
+        if radial is not None:
+            proj, lensmap, du_df, du_dk = _radial(K, k1, proj)
+            if focal:
+                Ji[:, :, 0] = du_df
+            if refine_k1:
+                Ji[:, :, -1] = du_dk
+        elif focal:
+            # d(u, v) / d fx with fy and the skew scaled alike: (u - c) / fx
+            Ji[:, :, 0] = (proj - K[:2, 2]) / K[0, 0]
+            if A is not None:
+                Ji[:, :, 0] = np.einsum("mij,mj->mi", A, Ji[:, :, 0])
         r = proj - uv
         if A is not None:
             r = np.einsum("mij,mj->mi", A, r)
@@ -678,12 +750,15 @@ def _schur_lm(
         bad = ~((z > 0) & np.isfinite(r2))
         r = np.where(bad[:, None], 0.0, r)
         r2 = np.where(bad, 0.0, r2)
+        Ji[bad] = 0.0
         cost, w = _huber(r2, delta)
         w[bad] = 0.0
-        return r, r2, cost + 1e6 * float(bad.sum()), w
+        if lensmap is not None and radial is not None:
+            lensmap = np.where(np.isfinite(lensmap), lensmap, 0.0)
+        return r, r2, cost + 1e6 * float(bad.sum()), w, lensmap, Ji
 
-    def jacobians(R: F64, t: F64, X: F64, K: F64) -> tuple[F64, F64, F64]:
-        """Return each view's d/dX (M, 2, 3), d/d(omega, t) of the free (Mh, 2, 6), d/dfx."""
+    def jacobians(R: F64, t: F64, X: F64, K: F64, lensmap: F64 | None) -> tuple[F64, F64]:
+        """Return each view's d/dX (M, 2, 3) and d/d(omega, t) of the free (Mh, 2, 6)."""
         fx, fy, sk = K[0, 0], K[1, 1], K[0, 1]
         RX = np.einsum("mij,mj->mi", R[ci], X[pi])
         Xc = RX + t[ci]
@@ -694,28 +769,27 @@ def _schur_lm(
         Jp[:, 0, 2] = -(fx * Xc[:, 0] + sk * Xc[:, 1]) / z**2
         Jp[:, 1, 1] = fy / z
         Jp[:, 1, 2] = -fy * Xc[:, 1] / z**2
-        # d(u, v) / d fx with fy and the skew scaled alike: (u - c) / fx
-        Jf = (Xc[:, :2] @ K[:2, :2].T) / z[:, None] / fx
-        if A is not None:
-            Jp = A @ Jp
-            Jf = np.einsum("mij,mj->mi", A, Jf)
+        if lensmap is not None:
+            Jp = lensmap @ Jp
         Jx = Jp @ R[ci]  # d/dX
         Jc = np.concatenate([-Jp @ _skew_batch(RX), Jp], axis=2)[has]  # d/d(omega, t)
-        return Jx, Jc, Jf
+        return Jx, Jc
 
     R, t, X, K = R.copy(), t.copy(), X.copy(), np.array(K, np.float64)
-    res, _, cost, w = evaluate(R, t, X, K)
+    k1 = 0.0 if radial is None else float(radial)
+    res, _, cost, w, lensmap, Ji = evaluate(R, t, X, K, k1)
     lam = 1e-3
     gain = 0.0
     for _ in range(max_iter):
         if kernel:
             U, V = np.zeros((nf, 6, 6)), np.zeros((m, 3, 3))
             gc, gp, Wo = np.zeros((nf, 6)), np.zeros((m, 3)), np.empty((Mh, 6, 3))
-            normal_equations(K, R, t, X, ci, pi, cs, hpos, res, w, A_k, U, V, gc, gp, Wo)
-            if focal:
-                Jx, Jc, Jf = jacobians(R, t, X, K)
+            Ak = A_k if radial is None else np.ascontiguousarray(lensmap, np.float64)
+            normal_equations(K, R, t, X, ci, pi, cs, hpos, res, w, Ak, U, V, gc, gp, Wo)
+            if ni:
+                Jx, Jc = jacobians(R, t, X, K, lensmap)
         else:
-            Jx, Jc, Jf = jacobians(R, t, X, K)
+            Jx, Jc = jacobians(R, t, X, K, lensmap)
             wJx = Jx * w[:, None, None]
             V = _sum_blocks(pi, gram(wJx, Jx), m)
             gp = _sum_blocks(pi, -(wJx[:, 0] * res[:, :1] + wJx[:, 1] * res[:, 1:]), m)
@@ -724,12 +798,12 @@ def _schur_lm(
             rh = res[has]
             gc = _sum_blocks(csh, -(wJc[:, 0] * rh[:, :1] + wJc[:, 1] * rh[:, 1:]), nf)
             Wo = gram(wJc, Jx[has])  # (Mh, 6, 3)
-        if focal:  # the focal length's row: with itself, each free camera, each point
-            wJf = Jf * w[:, None]
-            Uff = float(np.sum(wJf * Jf))
-            gf = -float(np.sum(wJf * res))
-            Ucf = _sum_blocks(csh, np.einsum("mki,mk->mi", Jc, wJf[has]), nf)  # (nf, 6)
-            Wf = _sum_blocks(pi, np.einsum("mk,mki->mi", wJf, Jx), m)  # (m, 3)
+        if ni:  # the intrinsics' rows: with themselves, each free camera, each point
+            wJi = Ji * w[:, None, None]
+            Uii = np.einsum("mki,mkj->ij", wJi, Ji)
+            gi = -np.einsum("mki,mk->i", wJi, res)
+            Uci = _sum_blocks(csh, gram(Jc, wJi[has]), nf)  # (nf, 6, ni)
+            Wi = _sum_blocks(pi, gram(Jx, wJi), m)  # (m, 3, ni)
         dV = np.diagonal(V, axis1=1, axis2=2)
         dU = np.diagonal(U, axis1=1, axis2=2)
         improved = False
@@ -741,34 +815,34 @@ def _schur_lm(
             ar = np.arange(nf)
             S4[ar, :, ar, :] += U + (lam * dU + 1e-12)[:, :, None] * eye6
             b = gc - _sum_blocks(csh, np.einsum("mij,mj->mi", Y, gp[pih]), nf)
-            if focal:
-                VWf = np.einsum("mij,mj->mi", Vinv, Wf)  # V^-1 Wf^T, a point at a time
-                col = Ucf - _sum_blocks(csh, np.einsum("mij,mj->mi", Y, Wf[pih]), nf)
-                S = np.block(
-                    [
-                        [S, col.reshape(-1, 1)],
-                        [
-                            col.reshape(1, -1),
-                            np.array([[(1 + lam) * Uff + 1e-12 - float(np.sum(Wf * VWf))]]),
-                        ],
-                    ]
-                )
-                b = np.append(b.ravel(), gf - float(np.sum(VWf * gp)))
+            if ni:
+                VWi = Vinv @ Wi  # V^-1 Wi, a point at a time (m, 3, ni)
+                col = (Uci - _sum_blocks(csh, Y @ Wi[pih], nf)).reshape(6 * nf, ni)
+                corner = Uii + np.diag(lam * np.diag(Uii) + 1e-12)
+                corner -= np.einsum("mji,mjk->ik", Wi, VWi)
+                S = np.block([[S, col], [col.T, corner]])
+                b = np.append(b.ravel(), gi - np.einsum("mji,mj->i", VWi, gp))
             try:
                 dc = cho_solve(cho_factor(S, check_finite=False), b.ravel(), check_finite=False)
             except np.linalg.LinAlgError:
                 lam *= 10.0
                 continue
-            K1 = K
+            K1, k11 = K, k1
             gpf = gp
-            if focal:
-                df, dc = float(dc[-1]), dc[:-1]
-                if not K[0, 0] + df > 0:
-                    lam *= 8.0
-                    continue
-                K1 = K.copy()
-                K1[:2, :2] *= (K[0, 0] + df) / K[0, 0]
-                gpf = gp - Wf * df
+            if ni:
+                di, dc = dc[-ni:], dc[:-ni]
+                if focal:
+                    if not K[0, 0] + di[0] > 0:
+                        lam *= 8.0
+                        continue
+                    K1 = K.copy()
+                    K1[:2, :2] *= (K[0, 0] + di[0]) / K[0, 0]
+                if refine_k1:
+                    k11 = k1 + float(di[-1])
+                    if not abs(k11) <= k1_max:
+                        lam *= 8.0
+                        continue
+                gpf = gp - Wi @ di
             dc6 = dc.reshape(nf, 6)
             wtdc = _sum_blocks(pih, np.einsum("mji,mj->mi", Wo, dc6[csh]), m)
             dp = np.einsum("mij,mj->mi", Vinv, gpf - wtdc)
@@ -777,17 +851,18 @@ def _schur_lm(
                 R1[free] = np.asarray(rvec_to_matrix(dc6[:, :3]), np.float64) @ R[free]
                 t1[free] = t[free] + dc6[:, 3:]
             X1 = X + dp
-            res1, _, cost1, w1 = evaluate(R1, t1, X1, K1)
+            res1, _, cost1, w1, map1, Ji1 = evaluate(R1, t1, X1, K1, k11)
             if cost1 < cost:
                 gain = (cost - cost1) / max(cost, 1e-300)
-                R, t, X, K, res, cost, w = R1, t1, X1, K1, res1, cost1, w1
+                R, t, X, K, k1, res, cost, w = R1, t1, X1, K1, k11, res1, cost1, w1
+                lensmap, Ji = map1, Ji1
                 lam = max(lam / 5.0, 1e-9)
                 improved = True
                 break
             lam *= 8.0
         if not improved or gain < ftol:
             break
-    return R, t, X, K
+    return R, t, X, K, k1
 
 
 def bundle_adjust(
@@ -863,7 +938,7 @@ def bundle_adjust(
     f = as_int(fixed, "fixed", minimum=0, maximum=max(n - 1, 0))
     keep = np.zeros(n, bool)
     keep[f] = True
-    Rb, tb, Xb, _ = _schur_lm(
+    Rb, tb, Xb, *_ = _schur_lm(
         k,
         R,
         t,
@@ -1108,6 +1183,54 @@ def _homography_hint(
     )
 
 
+def _undistorted(xy: F64, k: F64, distortion: DistortionModel | None) -> F64:
+    """Return the ideal pinhole pixels of image pixels ``xy`` (NaN where none), (N, 2)."""
+    if distortion is None or len(xy) == 0:
+        return np.array(xy, np.float64)
+    xn = (xy - k[:2, 2]) / np.diag(k)[:2]
+    und, ok = distortion.undistort(xn)
+    und = np.asarray(und, np.float64)
+    und[~np.asarray(ok, bool)] = np.nan
+    return np.asarray(und * np.diag(k)[:2] + k[:2, 2], np.float64)
+
+
+def _simple_radial(k1: float) -> DistortionModel:
+    """COLMAP's ``SIMPLE_RADIAL`` lens as imageform's: ``BrownConrady(k1)``."""
+    from imageform.geometry.distortion import BrownConrady
+
+    return BrownConrady(k1=float(k1))
+
+
+def _radial_start(distortion: DistortionModel | None) -> float:
+    """Return the radial term ``refine_distortion`` starts from: the lens's k1, 0 for none."""
+    from imageform.geometry.distortion import BrownConrady
+
+    if distortion is None:
+        return 0.0
+    if isinstance(distortion, BrownConrady) and not any(distortion.coeffs[1:]):
+        return float(distortion.k1)
+    raise InvalidInputError(
+        "refine_distortion refines one radial term k1 (COLMAP's SIMPLE_RADIAL): expected no "
+        f"distortion or BrownConrady with k1 alone, got {distortion!r}"
+    )
+
+
+#: ``refine_distortion``: the radial term is refined once this many frames are registered
+#: and this many points triangulated (two views leave it free to trade against the depths)
+_RADIAL_MIN_FRAMES = 4
+_RADIAL_MIN_POINTS = 100
+
+#: ``refine_distortion``: a radial term whose displacement at the image's corner,
+#: :math:`|\Delta k_1| r_c^2`, moves by more than this share of the corner's radius starts
+#: the reconstruction again from the lens found (as ``_FOCAL_RESTART`` for f)
+_RADIAL_RESTART = 0.01
+
+#: ``refine_distortion``: the radial term found is kept when it lowers the final sum of
+#: squared reprojection errors by this share at least, against the one given (0 for none)
+#: held (``choose_lens`` in :func:`_reconstruct`)
+_RADIAL_GAIN = 0.02
+
+
 def reconstruct_sequence(
     images: Sequence[ArrayLike],
     K: ArrayLike,
@@ -1121,8 +1244,9 @@ def reconstruct_sequence(
     masks: ArrayLike | Sequence[ArrayLike | None] | None = None,
     contrast_threshold: float = 0.04,
     refine_focal: bool = False,
+    refine_distortion: bool = False,
 ) -> Reconstruction:
-    """Reconstruct the cameras and a sparse point cloud from an ordered image sequence.
+    r"""Reconstruct the cameras and a sparse point cloud from an ordered image sequence.
 
     Parameters
     ----------
@@ -1159,6 +1283,22 @@ def reconstruct_sequence(
         refines the focal length from the final poses and points, a note when it moves
         by more than 10 % (the result's ``focal_fit_px``). The result's ``K`` is the one
         found.
+    refine_distortion : bool
+        Refine one radial distortion term shared by every frame, COLMAP's
+        ``SIMPLE_RADIAL`` lens (its default for a camera it does not know, with
+        ``refine_focal``):
+
+        .. math:: u = c + f\,(1 + k_1 r^2)\, x, \quad r^2 = \|x\|^2
+
+        (:math:`x` the normalised pinhole coordinates; ``BrownConrady(k1)``), from the
+        ``distortion`` given (None: :math:`k_1 = 0`; any other lens than ``BrownConrady``
+        with k1 alone is refused), in the bundle adjustments once 4 frames and 100 points
+        are registered, and in the final one; bounded by :math:`|k_1| r_{max}^2 \le 0.3`
+        (:math:`r_{max}` the farthest keypoint's radius). Each time it moves, every keypoint
+        is undistorted again with the lens found (the pairs, PnP and the triangulation use
+        it); when its displacement at the image's corner moves by more than 1 % of the
+        corner's radius, the reconstruction starts again from it (as for ``refine_focal``).
+        The result's ``distortion`` is the one found.
 
     Returns
     -------
@@ -1185,38 +1325,59 @@ def reconstruct_sequence(
         "masks": masks,
         "contrast_threshold": contrast_threshold,
         "refine_focal": bool(refine_focal),
+        "refine_distortion": bool(refine_distortion),
+        # refused before the keypoints: a lens it cannot refine
+        "radial_given": _radial_start(distortion) if refine_distortion else None,
         "cache": cache,
     }
     best = _one_model(images, K, distortion, kw)
-    if not refine_focal:
+    if not (refine_focal or refine_distortion):
         return best
-    # the focal length moved far from where it started: the first frames were registered
-    # with a wrong one (and some not at all); again from the one found, twice at most
+    # the focal length (or the lens) moved far from where it started: the first frames
+    # were registered with a wrong one (and some not at all); again from the one found,
+    # twice at most
     K_start = np.array(K, np.float64)
+    lens_start = distortion
+    h, w = np.asarray(images[0]).shape[:2]
     said: list[str] = []
     for _ in range(2):
         assert best.K is not None
         start, found = float(K_start[0, 0]), float(best.K[0, 0])
-        if abs(found / start - 1) < _FOCAL_RESTART:
+        k1_start = _radial_start(lens_start) if refine_distortion else 0.0
+        k1_found = _radial_start(best.distortion) if refine_distortion else 0.0
+        # the corner's normalised radius, squared: where the radial term moves most
+        c = best.K[:2, 2]
+        rc2 = max((x - c[0]) ** 2 + (y - c[1]) ** 2 for x in (0, w - 1) for y in (0, h - 1))
+        lens_moved = abs(k1_found - k1_start) * rc2 / found**2
+        if abs(found / start - 1) < _FOCAL_RESTART and lens_moved < _RADIAL_RESTART:
             break
         K1 = K_start.copy()
         K1[:2, :2] *= found / start
+        lens1 = best.distortion if refine_distortion else distortion
         cache.pop("pairs", None)  # verified with the other K; the keypoints stay
         try:
-            again = _one_model(images, K1, distortion, kw)
+            again = _one_model(images, K1, lens1, kw)
         except DegenerateConfigurationError:
             break
-        note = (
-            f"the focal length moved from {start:.1f} px to {found:.1f} px: reconstructed "
-            f"again from {found:.1f} px, found "
-            f"{float(again.K[0, 0]) if again.K is not None else found:.1f} px"
-        )
+        f_again = float(again.K[0, 0]) if again.K is not None else found
+        if refine_distortion:
+            k1_again = _radial_start(again.distortion)
+            note = (
+                f"the camera moved from f = {start:.1f} px, k1 = {k1_start:.3f} to "
+                f"f = {found:.1f} px, k1 = {k1_found:.3f}: reconstructed again from them, "
+                f"found f = {f_again:.1f} px, k1 = {k1_again:.3f}"
+            )
+        else:
+            note = (
+                f"the focal length moved from {start:.1f} px to {found:.1f} px: "
+                f"reconstructed again from {found:.1f} px, found {f_again:.1f} px"
+            )
         if int(again.registered.sum()) < int(best.registered.sum()):
             best = replace(best, notes=[*best.notes, note + ", fewer frames: not kept"])
             break
         said.append(note)
         best = replace(again, notes=[*again.notes, *said])
-        K_start = K1
+        K_start, lens_start = K1, lens1
     return best
 
 
@@ -1271,6 +1432,8 @@ def _reconstruct(
     cache: dict[str, Any],
     starts: frozenset[int] | None,
     refine_focal: bool = False,
+    refine_distortion: bool = False,
+    radial_given: float | None = None,
 ) -> Reconstruction:
     """Reconstruct one model (:func:`reconstruct_sequence`), started from a pair in ``starts``.
 
@@ -1308,17 +1471,14 @@ def _reconstruct(
             for im, m in zip(images, per_frame, strict=True)
         ]
     feats = cache["feats"]
+    # refine_distortion: COLMAP's SIMPLE_RADIAL lens, its k1 from the one given (0: none)
+    radial_k1: float | None = None
+    if refine_distortion:
+        radial_k1 = _radial_start(distortion)
+        distortion = _simple_radial(radial_k1)
+    raw = np.concatenate([feat.xy for feat in feats]) if feats else np.zeros((0, 2))
     # undistorted (ideal pinhole) pixels of every keypoint
-    ideal: list[F64] = []
-    for feat in feats:
-        if distortion is not None and len(feat):
-            xy = (feat.xy - k[:2, 2]) / np.diag(k)[:2]
-            und, ok = distortion.undistort(xy)
-            und = np.asarray(und, np.float64)
-            und[~np.asarray(ok, bool)] = np.nan
-            ideal.append(und * np.diag(k)[:2] + k[:2, 2])
-        else:
-            ideal.append(feat.xy.copy())
+    ideal: list[F64] = [_undistorted(feat.xy, k, distortion) for feat in feats]
     # the lens's local linear map from undistorted to image pixels at every keypoint: a
     # fisheye's undistortion stretches the rim twenty times, and so the keypoints' noise
     lin = [_image_jacobian(k, distortion, u) for u in ideal]
@@ -1510,8 +1670,26 @@ def _reconstruct(
         good = fin & ~bad & (2.0 * spread >= 1.5)
         P[tids[good]] = X[good]
 
-    def adjust(delta: float, iters: int, focal: bool = False) -> None:
-        """Bundle adjustment over every registered frame and point (``focal``: and ``k``'s f)."""
+    def relens(k1: float) -> None:
+        """Undistort every keypoint again with ``k`` and the radial term ``k1`` (its lens)."""
+        nonlocal distortion, radial_k1, all_A, all_mag, all_uv, o_uv, o_A
+        radial_k1 = k1
+        distortion = _simple_radial(k1)
+        ideal[:] = [_undistorted(feat.xy, k, distortion) for feat in feats]
+        all_A = np.concatenate([_image_jacobian(k, distortion, u) for u in ideal])
+        all_mag = _magnification(all_A)
+        all_uv = np.concatenate(ideal)
+        at = offset[o_frame] + o_kp
+        o_uv, o_A = all_uv[at], all_A[at]
+        o_ok[~np.all(np.isfinite(o_uv), axis=1)] = False
+
+    def adjust(delta: float, iters: int, focal: bool = False, lens: bool = False) -> None:
+        """Bundle adjustment over every registered frame and point (``focal``: and ``k``'s f).
+
+        ``lens`` (with ``refine_distortion``): the radial term too, on the keypoints as
+        the image has them, once ``_RADIAL_MIN_FRAMES`` frames and ``_RADIAL_MIN_POINTS``
+        points hold it; the keypoints are then undistorted again with the lens found.
+        """
         ids = np.flatnonzero(o_ok & registered[o_frame] & has_point()[o_track])
         if ids.size == 0:
             return
@@ -1520,23 +1698,86 @@ def _reconstruct(
         R0 = np.where(registered[:, None, None], Rs, np.eye(3))
         t0 = np.where(registered[:, None], ts, 0.0)
         pts, pslot = np.unique(o_track[ids], return_inverse=True)
-        Rn, tn, Xn, Kn = _schur_lm(
+        radial = (
+            radial_k1 is not None
+            and lens
+            and int(registered.sum()) >= _RADIAL_MIN_FRAMES
+            and pts.size >= _RADIAL_MIN_POINTS
+        )
+        Rn, tn, Xn, Kn, k1n = _schur_lm(
             k,
             R0,
             t0,
             P[pts],
             o_frame[ids],
             pslot,
-            o_uv[ids],
+            raw[offset[o_frame[ids]] + o_kp[ids]] if radial else o_uv[ids],
             fixed,
             delta,
             iters,
-            A=None if distortion is None else o_A[ids],
+            A=None if distortion is None or radial else o_A[ids],
             focal=focal,
+            radial=radial_k1 if radial else None,
         )
         Rs[registered], ts[registered] = Rn[registered], tn[registered]
         P[pts] = Xn
-        k[:] = Kn  # the keypoints' undistortion stays the given K's (a small change)
+        # without refine_distortion the keypoints' undistortion stays the given K's (a
+        # small change); with it, the keypoints are undistorted again by the lens found
+        moved = bool(np.any(Kn != k))
+        k[:] = Kn
+        if radial_k1 is not None and (radial or moved):
+            relens(k1n if radial else radial_k1)
+
+    def choose_lens(k1_given: float) -> None:
+        """Keep the radial term found only where it lowers the reprojection error.
+
+        One more adjustment holds it at ``k1_given`` (0: no distortion), from the final
+        poses, points and focal length; when the term found lowers the sum of squared
+        errors of the same observations by less than ``_RADIAL_GAIN``, the data do not
+        tell it (forward motion or a narrow view let it trade against f and the depths)
+        and the held one is kept (a penalty for one more parameter, as a model selection
+        by an information criterion: Torr 1998, "Geometric motion segmentation and model
+        selection", Phil. Trans. R. Soc. A 356).
+        """
+        assert radial_k1 is not None
+        ids = np.flatnonzero(o_ok & registered[o_frame] & has_point()[o_track])
+        if ids.size == 0 or radial_k1 == k1_given:
+            return
+        fixed = ~registered
+        fixed[i0] = True
+        R0 = np.where(registered[:, None, None], Rs, np.eye(3))
+        t0 = np.where(registered[:, None], ts, 0.0)
+        pts, pslot = np.unique(o_track[ids], return_inverse=True)
+        fr = o_frame[ids]
+        uv = raw[offset[fr] + o_kp[ids]]
+
+        def sse(K_: F64, k1: float, R_: F64, t_: F64, X_: F64) -> float:
+            proj, _ = _project_obs(K_, R_[fr], t_[fr], X_[pslot])
+            d = _radial(K_, k1, proj)[0] - uv
+            return float(np.nansum(d * d))
+
+        found = sse(k, radial_k1, R0, t0, P[pts])
+        Rn, tn, Xn, Kn, _ = _schur_lm(
+            k, R0, t0, P[pts], fr, pslot, uv, fixed, 0.0, 50,
+            focal=refine_focal, radial=k1_given, refine_radial=False,
+        )  # fmt: skip
+        held = sse(Kn, k1_given, Rn, tn, Xn)
+        gain = 1.0 - found / max(held, 1e-300)
+        said = (
+            f"the radial term k1 = {radial_k1:.4f} lowers the reprojection error (its sum of "
+            f"squares) by {100 * gain:.1f} % against k1 = {k1_given:.4f}"
+        )
+        if gain >= _RADIAL_GAIN:
+            notes.append(said + ": kept")
+            return
+        notes.append(
+            said + f" (less than {100 * _RADIAL_GAIN:.0f} %): held at {k1_given:.4f}, f refined"
+            " alone"
+        )
+        Rs[registered], ts[registered] = Rn[registered], tn[registered]
+        P[pts] = Xn
+        k[:] = Kn
+        relens(k1_given)
 
     def check_focal() -> float | None:
         """Return the focal length a final adjustment that refines it finds (K itself held)."""
@@ -1546,7 +1787,7 @@ def _reconstruct(
         fixed = ~registered
         fixed[i0] = True
         pts, pslot = np.unique(o_track[ids], return_inverse=True)
-        *_, Kc = _schur_lm(
+        _, _, _, Kc, _ = _schur_lm(
             k,
             np.where(registered[:, None, None], Rs, np.eye(3)),
             np.where(registered[:, None], ts, 0.0),
@@ -2016,7 +2257,7 @@ def _reconstruct(
         if nreg >= 1.4 * last_ba:
             # the focal length too once three frames hold it (two leave it free along the
             # baseline): a guess 70 % off converges here, not in the final adjustment
-            adjust(2.0, 10, refine_focal and nreg >= 3)
+            adjust(2.0, 10, refine_focal and nreg >= 3, lens=True)
             filter_obs(max_err)
             complete(2.0)
             triangulate(np.arange(n_tracks))
@@ -2049,14 +2290,16 @@ def _reconstruct(
     notes += [why_not[fi] for fi in sorted(pending)]
     # the final adjustment: robust, outliers out, the tracks completed, merged and
     # re-triangulated, robust again, then plain least squares on what is left
-    adjust(2.0, 30, refine_focal)
+    adjust(2.0, 30, refine_focal, lens=True)
     filter_obs(max_err)
     complete(2.0)
     triangulate(np.arange(n_tracks))
-    adjust(1.0, 30, refine_focal)
+    adjust(1.0, 30, refine_focal, lens=True)
     filter_obs(2.0)
-    adjust(0.0, 50, refine_focal)
+    adjust(0.0, 50, refine_focal, lens=True)
     filter_obs(2.0)
+    if radial_k1 is not None and radial_given is not None:
+        choose_lens(radial_given)
     focal_fit = None if refine_focal else check_focal()
     # the output in the first registered frame's camera frame (frame 0 when registered):
     # X' = R_f X + t_f, R_i' = R_i R_f^T, t_i' = t_i - R_i' t_f (a rigid motion: the
@@ -2110,5 +2353,5 @@ def _reconstruct(
             "a zoom) or refine it (refine_focal; imageform reconstruct --refine-focal)"
         )
     return Reconstruction(
-        Rs, ts, registered, Pout, colors, length, rms, notes, residuals, k, focal_fit
+        Rs, ts, registered, Pout, colors, length, rms, notes, residuals, k, focal_fit, distortion
     )

@@ -73,6 +73,13 @@ class ReconstructOptions(Options):
         "adjustments (one for every frame, the principal point held); a focal length from "
         "the EXIF or the guess is always refined.",
     )
+    refine_distortion: bool = option(
+        False,
+        help="Refine one radial distortion term k1 shared by every frame (COLMAP's "
+        "SIMPLE_RADIAL: u = c + f (1 + k1 r^2) x) in the bundle adjustments, from the "
+        "--camera file's (no distortion, or k1 alone) or 0 with --focal; without a camera "
+        "file or --focal it is always refined. The camera found is written to camera.toml.",
+    )
     max_features: int = option(
         4000, help="SIFT keypoints per frame (the strongest).", minimum=8, maximum=1_000_000
     )
@@ -284,7 +291,7 @@ def _guess_camera(
 
 
 def _camera_note(intr: dict[str, Any], first: Path | None) -> str:
-    """Say where K comes from (no camera file)."""
+    """Say where K comes from (no camera file), and what the refinement found."""
     f0 = intr["focal_px_initial"]
     refined = (
         f"; refined by bundle adjustment to f = {intr['focal_px']:.1f} px "
@@ -292,6 +299,11 @@ def _camera_note(intr: dict[str, Any], first: Path | None) -> str:
         if intr["refined"]
         else ""
     )
+    if intr.get("distortion_refined"):
+        k1 = intr["k1"]
+        refined += (", " if refined else "; refined by bundle adjustment to ") + (
+            f"k1 = {k1:.4f} (SIMPLE_RADIAL)"
+        )
     if intr["source"] == "camera file":
         return f"the camera file's f = {f0:.1f} px{refined}"
     why = {
@@ -303,6 +315,14 @@ def _camera_note(intr: dict[str, Any], first: Path | None) -> str:
         f"no camera file: f = {f0:.1f} px from {why}, the principal point at the center, "
         f"no distortion{refined}"
     )
+
+
+def _metrics_rms(rec: Any) -> float | None:
+    """Return the RMS of the final reprojection errors (px), None without any."""
+    import numpy as np
+
+    r = np.asarray(rec.residuals_px, np.float64)
+    return float(np.sqrt(np.mean(r**2))) if r.size else None
 
 
 def _metrics(rec: Any, names: list[str], seconds: dict[str, float]) -> dict[str, Any]:
@@ -339,8 +359,8 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         )
     from imageform._jsonio import write_json
     from imageform._kernels import ahead
-    from imageform.geometry import matrix_to_rvec, reconstruct_sequence
-    from imageform.io import field_camera_matrix, read_camera
+    from imageform.geometry import Camera, matrix_to_rvec, reconstruct_sequence
+    from imageform.io import Provenance, field_camera_matrix, read_camera, write_camera
     from imageform.workflows._ply import write_points_ply
     from imageform.workflows._reconstruct_report import write_report
     from imageform.workflows._video import deinterlace_note, deinterlace_summary
@@ -349,6 +369,16 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         out, run.outputs.force, _MARKERS, "reconstruct", "a previous reconstruction"
     )
     cam = None if opts.camera is None else read_camera(opts.camera).camera
+    lens0 = None if cam is None else cam.distortion
+    if opts.refine_distortion and lens0 is not None:
+        coeffs = tuple(getattr(lens0, "coeffs", ()))
+        if type(lens0).__name__ != "BrownConrady" or any(coeffs[1:]):
+            raise InvalidInputError(
+                f"{opts.camera}: --refine-distortion refines one radial term k1 (COLMAP's "
+                f"SIMPLE_RADIAL), the camera file's lens is {type(lens0).__name__} "
+                f"{', '.join(f'{c:g}' for c in coeffs)}: give a camera without distortion or "
+                "with brown_conrady k1 alone"
+            )
     size = (
         None
         if cam is None or cam.image_size is None
@@ -369,6 +399,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         intrinsics = {"source": "camera file", "focal_px_initial": float(cam.K[0, 0])}
     K = K_frame if field is None else field_camera_matrix(K_frame, field)
     refine = opts.refine_focal or intrinsics["source"] in ("exif", "guess")
+    refine_lens = opts.refine_distortion or intrinsics["source"] in ("exif", "guess")
     if len(images) < 2:
         raise InvalidInputError(
             f"{frames}: {len(images)} frame"
@@ -408,6 +439,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
             masks=mask,
             contrast_threshold=opts.contrast_threshold,
             refine_focal=refine,
+            refine_distortion=refine_lens,
         )
     except DegenerateConfigurationError as exc:
         raise DegenerateConfigurationError(f"{frames}: {exc}{_hint(opts)}") from exc
@@ -421,6 +453,12 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     intrinsics["focal_px"] = float(np.asarray(K if rec.K is None else rec.K)[0, 0])
     # held: the focal length a bundle adjustment refining it finds (the given K's check)
     intrinsics["focal_px_fit"] = rec.focal_fit_px
+    # the camera found (the frame's, not its field's: the refinement scales fx and fy alike)
+    K_out = np.array(K_frame, np.float64)
+    K_out[:2, :2] *= intrinsics["focal_px"] / float(np.asarray(K)[0, 0])
+    lens = rec.distortion if refine_lens else distortion
+    intrinsics["distortion_refined"] = refine_lens
+    intrinsics["k1"] = float(getattr(lens, "k1", 0.0)) if refine_lens else None
     del images
     folder = run.folder(out)
     t2 = time.perf_counter()
@@ -443,6 +481,21 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         comment=f"imageform reconstruct {Path(frames).name}: the world is the camera frame of "
         "the first registered frame",
     )
+    write_camera(
+        folder / "camera.toml",
+        Camera(K_out, distortion=lens, image_size=(info.width, info.height)),
+        provenance=Provenance(
+            command="imageform reconstruct",
+            based_on=None if opts.camera is None else str(opts.camera),
+            rms_px=_metrics_rms(rec),
+            views_used=int(np.sum(rec.registered)),
+            points_used=int(rec.points.shape[0]),
+            fixed=tuple(
+                [*([] if refine else ["focal length"]), "principal point"]
+                + ([] if refine_lens else ["distortion"])
+            ),
+        ),
+    )
     seconds["write"] = time.perf_counter() - t2
     metrics = {
         "format": METRICS_FORMAT,
@@ -463,7 +516,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     seconds["report"] = time.perf_counter() - t3
     metrics["seconds"] = {k: round(v, 3) for k, v in seconds.items()}
     write_json(folder / "metrics.json", metrics)
-    if cam is None or refine:
+    if cam is None or refine or refine_lens:
         run.note(f"note: {_camera_note(intrinsics, first)}")
     deint = deinterlace_note(reader, info.fps, "reconstructing from")
     if deint:
@@ -480,6 +533,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         "points_file": out / "points.ply",
         "report": out / "report.html",
         "metrics": out / "metrics.json",
+        "camera_file": out / "camera.toml",
         **{k: v for k, v in metrics.items() if k not in ("format", "version", "options")},
     }
     med, rms = metrics["reprojection_px_median"], metrics["reprojection_px_rms"]
@@ -493,13 +547,13 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
         + f"; {total:.1f} s ("
         + ", ".join(f"{k} {v:.1f} s" for k, v in seconds.items())
         + ")",
-        f"cameras.csv, points.ply, report.html, metrics.json -> {out}",
+        f"cameras.csv, points.ply, camera.toml, report.html, metrics.json -> {out}",
     )
     return Result(summary, text)
 
 
 #: What the output folder holds (its --help, and the refusal of a file name for it).
-_HOLDS = "cameras.csv, points.ply, report.html, metrics.json"
+_HOLDS = "cameras.csv, points.ply, camera.toml, report.html, metrics.json"
 
 WORKFLOWS = (
     Workflow(
