@@ -180,3 +180,16 @@ def test_bad_input() -> None:
         MarkerTracker(0, SIDE, K, dictionary="9x9_5")
     with pytest.raises(InvalidInputError, match="frame"):
         MarkerTracker(0, SIDE, K).update(np.zeros(5))
+
+
+def test_distorted_corners_are_undistorted_first() -> None:
+    from imageform.geometry import BrownConrady, project_points_distorted
+
+    lens = BrownConrady(k1=-0.3, k2=0.1)
+    R = np.diag([1.0, -1, -1]) @ np.asarray(rvec_to_matrix([0.5, -0.3, 0.2]))
+    t = np.array([60.0, 30.0, 250.0])
+    uv = np.asarray(project_points_distorted(marker_points(SIDE), K, R, t, lens)[0])
+    both = solve_square_pose(uv, SIDE, K, lens)
+    assert np.abs(both.R[0] - R).max() < 1e-6 and np.allclose(both.tvec[0], t, atol=1e-4)
+    plain = solve_square_pose(uv, SIDE, K)  # the lens ignored: a pose off the truth
+    assert np.linalg.norm(plain.tvec[0] - t) > 1.0
