@@ -118,3 +118,64 @@ def write_video(
         for i, f in enumerate(frames):
             write_image(path / f"frame{i:04d}.png", f)
     return truth
+
+
+def marker_frame(
+    K: np.ndarray,
+    pose: tuple[np.ndarray, np.ndarray],
+    size: tuple[int, int],
+    *,
+    marker_id: int = 7,
+    dictionary: str = "4x4_50",
+    side: float = 40.0,
+    noise: float = 2.0,
+    blur: float = 0.0,
+    rng: np.random.Generator | None = None,
+) -> np.ndarray:
+    """One grey frame of an ArUco marker (imageform's image of it) seen from ``pose``.
+
+    The marker's frame is OpenCV's (centre origin, x right, y up, z out of the print: as
+    :func:`imageform.geometry.marker_points`), a white margin of a third of its side around
+    it on a grey background; drawn at 4x4 supersampling and averaged down (edges as a lens
+    and sensor blur them, not aliased), then a Gaussian blur of ``blur`` pixels and sensor
+    noise.
+    """
+    import cv2
+
+    from imageform.geometry import aruco_marker_image
+
+    R, t = pose
+    px = 240
+    q = px // 3
+    tex = np.full((px + 2 * q, px + 2 * q), 255, np.uint8)
+    tex[q : q + px, q : q + px] = aruco_marker_image(marker_id, dictionary, size_px=px)
+    s = side / px
+    # texture pixel (j, i) centre at x = (j + 0.5 - q) s - side/2, y = side/2 - (i + 0.5 - q) s
+    A = np.array([[s, 0, (0.5 - q) * s - side / 2], [0, -s, side / 2 - (0.5 - q) * s], [0, 0, 1]])
+    S = 4
+    K4 = np.diag([S, S, 1.0]) @ K
+    K4[0, 2], K4[1, 2] = S * K[0, 2] + (S - 1) / 2, S * K[1, 2] + (S - 1) / 2
+    H = K4 @ np.column_stack([R[:, 0], R[:, 1], t]) @ A
+    big = cv2.warpPerspective(
+        tex, H, (size[0] * S, size[1] * S), flags=cv2.INTER_LINEAR, borderValue=90
+    )
+    f = cv2.resize(big, size, interpolation=cv2.INTER_AREA).astype(np.float64)
+    if blur:
+        f = cv2.GaussianBlur(f, (0, 0), blur)
+    if noise:
+        rng = rng or np.random.default_rng(0)
+        f = f + rng.normal(0, noise, f.shape)
+    return np.clip(np.round(f), 0, 255).astype(np.uint8)
+
+
+def marker_poses(n: int, distance: float = 300.0) -> list[tuple[np.ndarray, np.ndarray]]:
+    """A smooth path around a marker at the origin (its z towards the camera): R, t in mm."""
+    from imageform.geometry import look_at
+
+    out = []
+    for i in range(n):
+        a = 2 * np.pi * i / max(n, 1)
+        eye = np.array([90 * np.cos(a), 60 * np.sin(a), distance])
+        pose = look_at(eye, np.array([8 * np.sin(a), 0.0, 0.0]), up=(0.0, 1.0, 0.0))
+        out.append((np.asarray(pose.R, np.float64), np.asarray(pose.t, np.float64)))
+    return out

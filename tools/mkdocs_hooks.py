@@ -119,6 +119,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "reconstruct-fisheye": "benchmarks/bench_reconstruct_fisheye.py",
     "track-breaks": "benchmarks/check_track_breaks.py",
     "track-fresh": "benchmarks/check_track_fresh.py",
+    "track-marker": "benchmarks/check_track_marker.py",
     "track-symmetric": "benchmarks/check_track_symmetric.py",
     "remap": "benchmarks/bench_remap.py",
     "report": "benchmarks/bench_report.py",

@@ -1718,6 +1718,12 @@ VALID.update(
     {
         "imageform.geometry.BoardPose": Skip("a result dataclass built by BoardTracker.update"),
         "imageform.geometry.BoardTracker": call(_BOARD_TRACK, _K_TRACK),
+        "imageform.geometry.MarkerTracker": call(7, 40.0, _K_TRACK, dictionary="4x4_50"),
+        "imageform.geometry.SquarePoses": Skip("a result NamedTuple built by solve_square_pose"),
+        "imageform.geometry.marker_points": call(40.0),
+        "imageform.geometry.solve_square_pose": call(
+            [[180.0, 230.0], [220.0, 230.0], [220.0, 270.0], [180.0, 270.0]], 40.0, _K_TRACK
+        ),
         "imageform.geometry.Features": Skip("a result dataclass built by detect_features"),
         "imageform.geometry.Reconstruction": Skip(
             "a result dataclass built by reconstruct_sequence"
@@ -1780,6 +1786,13 @@ VALID.update(
 VALID.update(
     {
         "imageform.geometry.BoardTracker.reset": method(VALID["imageform.geometry.BoardTracker"]),
+        "imageform.geometry.MarkerTracker.reset": method(VALID["imageform.geometry.MarkerTracker"]),
+        "imageform.geometry.MarkerTracker.update": method(
+            VALID["imageform.geometry.MarkerTracker"], _BOARD_TRACK.image(20, margin_px=10)
+        ),
+        "imageform.geometry.MarkerTracker.choose": Skip(
+            "takes a SquarePoses from solve_square_pose (tests/geometry/test_marker_tracking.py)"
+        ),
         "imageform.geometry.BoardTracker.update": method(
             VALID["imageform.geometry.BoardTracker"], _BOARD_TRACK.image(20, margin_px=10)
         ),

@@ -198,6 +198,12 @@ def _base(tmp_path: Path, clip: tuple[Path, Path, list]) -> list[str]:
             "expected --overlay as a video file (.mp4, .m4v, .mov, .mkv, .avi), got 'o.png'",
         ),
         (["--board", "9x6", "--square", "30mm", "--fps", "1e300"], "expected --fps in (0, 10000)"),
+        (["--board", "9x6"], "needs --square"),
+        (["--board", "aruco:50", "--marker", "40mm", "--dictionary", "4x4_50"], "id 0 to 49"),
+        (["--board", "aruco:3"], "aruco:ID needs --marker"),
+        (["--board", "aruco:3", "--marker", "4cm", "--square", "4cm"], "--square is for"),
+        (["--board", "aruco:x"], "aruco:ID (one marker)"),
+        (["--board", "aruco:3", "--marker", "4cm", "--smooth", "2"], "--smooth"),
     ],
 )
 def test_bad_options(
@@ -439,3 +445,34 @@ def test_tracked_corners_blurred_by_motion_are_not_kept() -> None:
     assert np.linalg.norm(pose.tvec - t) / np.linalg.norm(t) < 0.002
     dR = np.asarray(rvec_to_matrix(pose.rvec)) @ R.T
     assert np.degrees(np.arccos(np.clip((np.trace(dR) - 1) / 2, -1, 1))) < 0.5
+
+
+def test_track_one_aruco_marker_with_overlay(tmp_path: Path) -> None:
+    """Render a marker's video, track it with ``--board aruco:ID``, draw the plan on it."""
+    from imageform.geometry import rvec_to_matrix
+    from imageform.io import VideoWriter, open_video
+
+    truth = video_scenes.marker_poses(16)
+    rng = np.random.default_rng(5)
+    video = tmp_path / "marker.mp4"
+    with VideoWriter(video, fps=30, quality=12) as out:
+        for p in truth:
+            grey = video_scenes.marker_frame(K, p, SIZE, noise=2.0, blur=0.6, rng=rng)
+            out.write(np.repeat(grey[..., None], 3, axis=2))
+    camera = write_camera(tmp_path / "camera.toml", Camera(K, image_size=SIZE))
+    plan = tmp_path / "plan.csv"
+    plan.write_text("x,y,z,path\n-20,-20,0,cut\n20,20,0,cut\n0,0,30,\n")
+    poses, overlay = tmp_path / "poses.csv", tmp_path / "overlay.mp4"
+    args = ["track", str(video), "--camera", str(camera), "--board", "aruco:7"]
+    args += ["--marker", "4cm", "--dictionary", "4x4_50", "-o", str(poses)]
+    assert main([*args, "--overlay", str(overlay), "--plan", str(plan)]) == 0
+    rows = _read(poses)
+    assert [r["found"] for r in rows] == ["1"] * 16 and {r["corners"] for r in rows} == {"4"}
+    for row, (R, t) in zip(rows, truth, strict=True):
+        tv = np.array([float(row[k]) for k in ("tx", "ty", "tz")]) * 10  # cm -> mm
+        Rv = np.asarray(rvec_to_matrix([float(row[k]) for k in ("rx", "ry", "rz")]))
+        assert np.linalg.norm(tv - t) < 0.01 * np.linalg.norm(t), (tv, t)
+        angle = np.degrees(np.arccos(np.clip((np.trace(Rv @ R.T) - 1) / 2, -1, 1)))
+        assert angle < 1.5, angle
+    with open_video(overlay) as v:
+        assert len(list(v)) == 16

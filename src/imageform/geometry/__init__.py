@@ -73,6 +73,12 @@ from imageform.geometry.horizon_detection import HorizonResult, detect_horizon
 from imageform.geometry.intrinsics import Intrinsics, intrinsic_matrix, projected_size
 from imageform.geometry.line_segments import LineSegments, detect_line_segments
 from imageform.geometry.lsd import lsd_segments
+from imageform.geometry.marker_tracking import (
+    MarkerTracker,
+    SquarePoses,
+    marker_points,
+    solve_square_pose,
+)
 from imageform.geometry.plumb_line import PlumbLineResult, estimate_distortion_from_lines
 from imageform.geometry.pnp import PnPResult, solve_pnp
 from imageform.geometry.pnp_batch import solve_pnp_batch
@@ -174,6 +180,7 @@ __all__ = [
     "Intrinsics",
     "KannalaBrandt",
     "LineSegments",
+    "MarkerTracker",
     "PlumbLineResult",
     "PnPResult",
     "Pose",
@@ -181,6 +188,7 @@ __all__ = [
     "Reconstruction",
     "RefinedCorners",
     "RelativePose",
+    "SquarePoses",
     "StereoCalibrationResult",
     "StereoRectification",
     "TriangulationResult",
@@ -236,6 +244,7 @@ __all__ = [
     "lines_from_segments",
     "look_at",
     "lsd_segments",
+    "marker_points",
     "match_features",
     "matrix_to_euler",
     "matrix_to_quaternion",
@@ -258,6 +267,7 @@ __all__ = [
     "solve_pnp",
     "solve_pnp_batch",
     "solve_pnp_ransac",
+    "solve_square_pose",
     "stereo_calibrate",
     "stereo_disparity",
     "stereo_rectify",

@@ -1,9 +1,10 @@
 """``imageform track``: a board's pose in every frame of a video, and the plan drawn on it.
 
 The course's surgical-navigation loop: the endoscope is calibrated (its camera file), a
-board (ChArUco or checkerboard) is fixed to the patient's frame, and each frame's pose of the
-board places a plan drawn in board coordinates on the live image. The maths lives in
-:class:`imageform.geometry.BoardTracker` (detection, PnP, prediction, smoothing) and
+board (ChArUco or checkerboard) or one ArUco marker is fixed to the patient's frame, and each
+frame's pose of the board places a plan drawn in board coordinates on the live image. The
+maths lives in :class:`imageform.geometry.BoardTracker` (detection, PnP, prediction,
+smoothing), :class:`imageform.geometry.MarkerTracker` (one marker: IPPE-square) and
 :func:`imageform.report.overlays.draw_pose_overlay`; this module reads the video, writes
 ``poses.csv`` and the overlay video, and reports speed and jitter.
 """
@@ -34,26 +35,34 @@ __all__ = ["POSE_COLUMNS", "WORKFLOWS", "TrackOptions", "parse_track_board"]
 POSE_COLUMNS = ("frame", "time_s", "found", "corners", "rx", "ry", "rz", "tx", "ty", "tz", "rms_px")
 
 _BOARD = re.compile(r"^(charuco|checkerboard):(\d+)x(\d+)$|^(\d+)x(\d+)$")
+_MARKER = re.compile(r"^aruco:(\d+)$")
 
 
-def parse_track_board(text: str) -> tuple[str, tuple[int, int]]:
-    """Parse ``--board``: ``charuco:COLSxROWS`` (squares) or ``checkerboard:COLSxROWS``.
+def parse_track_board(text: str) -> tuple[str, tuple[int, ...]]:
+    """Parse ``--board``: ``charuco:COLSxROWS``, ``checkerboard:COLSxROWS`` or ``aruco:ID``.
 
     A checkerboard is given by its inner corners (OpenCV's pattern size, as ``imageform
-    calibrate``); a bare ``COLSxROWS`` is a checkerboard.
+    calibrate``); a bare ``COLSxROWS`` is a checkerboard; ``aruco:ID`` is one ArUco marker
+    (its id in ``--dictionary``, checked by the caller), returned as ``("aruco", (ID,))``.
 
     Examples
     --------
     >>> parse_track_board("charuco:7x5"), parse_track_board("checkerboard:9x6")
     (('charuco', (7, 5)), ('checkerboard', (9, 6)))
+    >>> parse_track_board("aruco:23")
+    ('aruco', (23,))
     """
     if not isinstance(text, str):
         raise InvalidInputError(f"expected text (--board) as a str, got {type(text).__name__}")
-    m = _BOARD.match(text.strip().lower())
+    key = text.strip().lower()
+    marker = _MARKER.match(key)
+    if marker:
+        return "aruco", (int(marker.group(1)),)
+    m = _BOARD.match(key)
     if not m:
         raise InvalidInputError(
-            "expected --board (text) as charuco:COLSxROWS (squares) or checkerboard:COLSxROWS "
-            f"(inner corners), got {text[:40]!r}"
+            "expected --board (text) as charuco:COLSxROWS (squares), checkerboard:COLSxROWS "
+            f"(inner corners) or aruco:ID (one marker), got {text[:40]!r}"
         )
     if m.group(1):
         kind, cols, rows = m.group(1), int(m.group(2)), int(m.group(3))
@@ -80,19 +89,25 @@ class TrackOptions(Options):
         input=True,
     )
     board: str = option(
-        help="charuco:COLSxROWS (squares, with --marker) or checkerboard:COLSxROWS (inner "
-        "corners).",
-        metavar="KIND:CxR",
+        help="charuco:COLSxROWS (squares, with --square and --marker), checkerboard:COLSxROWS "
+        "(inner corners, with --square) or aruco:ID (one ArUco marker of --dictionary, with "
+        "--marker).",
+        metavar="KIND:SPEC",
     )
-    square: str = option(
-        help="Side of a square with unit (30mm, 3cm; bare number: mm): the unit of the poses.",
+    square: str | None = option(
+        None,
+        help="Side of a square with unit (30mm, 3cm; bare number: mm): the unit of the poses "
+        "(ChArUco and checkerboard).",
     )
     marker: str | None = option(
-        None, help="ChArUco: side of a marker with unit (22mm), smaller than --square."
+        None,
+        help="Side of a marker's black square with unit (22mm): ChArUco's, smaller than "
+        "--square, or the one marker's of aruco:ID (the unit of its poses).",
     )
     dictionary: str = option(
         "6x6_250",
-        help="ChArUco: the markers' ArUco dictionary (4x4_50 ... 7x7_1000, aruco_original).",
+        help="ChArUco or aruco:ID: the markers' ArUco dictionary (4x4_50 ... 7x7_1000, "
+        "aruco_original).",
         choices="imageform.geometry.aruco:ARUCO_DICTIONARIES",
     )
     overlay: Path | None = option(
@@ -137,7 +152,27 @@ class TrackOptions(Options):
         from imageform._units import parse_length
 
         super().check()
-        kind, _ = parse_track_board(self.board)
+        kind, spec = parse_track_board(self.board)
+        if kind == "aruco":
+            from imageform.geometry.aruco import aruco_dictionary
+
+            size = aruco_dictionary(self.dictionary).size
+            if spec[0] >= size:
+                raise InvalidInputError(
+                    f"expected an ArUco marker id 0 to {size - 1} of --dictionary "
+                    f"{self.dictionary} in --board, got {self.board}"
+                )
+            if self.marker is None:
+                raise InvalidInputError("--board aruco:ID needs --marker (its side, e.g. 50mm)")
+            if self.square is not None:
+                raise InvalidInputError(
+                    "--square is for a ChArUco board or a checkerboard; aruco:ID's side is --marker"
+                )
+            parse_length(self.marker, "--marker", default_unit="mm", unit="mm")
+            self._check_rest()
+            return
+        if self.square is None:
+            raise InvalidInputError(f"--board {kind}:COLSxROWS needs --square (e.g. 30mm)")
         parse_length(self.square, "--square", default_unit="mm", unit="mm")
         if kind == "charuco":
             if self.marker is None:
@@ -149,18 +184,29 @@ class TrackOptions(Options):
                     f"expected --marker smaller than --square, got {self.marker}"
                 )
         elif self.marker is not None:
-            raise InvalidInputError("--marker is for a ChArUco --board charuco:COLSxROWS")
+            raise InvalidInputError(
+                "--marker is for a ChArUco --board charuco:COLSxROWS or an ArUco aruco:ID"
+            )
+        self._check_rest()
+
+    def _check_rest(self) -> None:
+        """Check the smoothing weight, the overlay's suffix, --fps and --max-frames."""
         if self.smooth is not None and not 0 < self.smooth < 1:
             raise InvalidInputError(f"expected --smooth in (0, 1), got {self.smooth:g}")
         if self.overlay is not None and self.overlay.suffix.lower() not in OVERLAY_SUFFIXES:
             raise InvalidInputError(
                 f"expected --overlay as a video file ({', '.join(OVERLAY_SUFFIXES)}), "
-                f"got {self.overlay.name!r}"
+                f"got {_shown(self.overlay.name)!r}"
             )
         if self.fps is not None and not 0 < self.fps < 10_000:
             raise InvalidInputError(f"expected --fps in (0, 10000) frames/s, got {self.fps:g}")
         if self.max_frames is not None and self.max_frames < 1:
             raise InvalidInputError(f"expected --max-frames >= 1, got {self.max_frames}")
+
+
+def _shown(text: str) -> str:
+    """Return ``text`` cut to 60 characters (an error message quotes it)."""
+    return text if len(text) <= 60 else text[:60] + "..."
 
 
 def _fmt(x: float) -> str:
@@ -178,7 +224,7 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
     import numpy as np
 
     from imageform._units import length_unit, parse_length
-    from imageform.geometry import BoardTracker, CharucoBoard
+    from imageform.geometry import BoardTracker, CharucoBoard, MarkerTracker
     from imageform.io import (
         VideoWriter,
         field_camera_matrix,
@@ -191,24 +237,41 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
 
     cf = read_camera(opts.camera)
     cam = cf.camera
-    unit = length_unit(opts.square, default_unit="mm")
-    square = parse_length(opts.square, "--square", default_unit="mm", unit=unit)
     kind, size = parse_track_board(opts.board)
-    if kind == "charuco":
+    smooth = opts.smooth if opts.smooth is not None else 1.0
+    tracker: Any
+    if kind == "aruco":
         assert opts.marker is not None
-        marker = parse_length(opts.marker, "--marker", default_unit="mm", unit=unit)
-        board: Any = CharucoBoard(size, square, marker, opts.dictionary)
+        unit = length_unit(opts.marker, default_unit="mm")
+        side = parse_length(opts.marker, "--marker", default_unit="mm", unit=unit)
+        tracker = MarkerTracker(
+            size[0],
+            side,
+            cam.K,
+            cam.distortion,
+            dictionary=opts.dictionary,
+            smooth=smooth,
+            predict=not opts.no_predict,
+        )
     else:
-        board = size
+        assert opts.square is not None
+        unit = length_unit(opts.square, default_unit="mm")
+        square = parse_length(opts.square, "--square", default_unit="mm", unit=unit)
+        if kind == "charuco":
+            assert opts.marker is not None
+            marker = parse_length(opts.marker, "--marker", default_unit="mm", unit=unit)
+            board: Any = CharucoBoard((size[0], size[1]), square, marker, opts.dictionary)
+        else:
+            board = (size[0], size[1])
+        tracker = BoardTracker(
+            board,
+            cam.K,
+            cam.distortion,
+            square=square,
+            smooth=smooth,
+            predict=not opts.no_predict,
+        )
     plan = read_plan(opts.plan) if opts.plan is not None else None
-    tracker = BoardTracker(
-        board,
-        cam.K,
-        cam.distortion,
-        square=square,
-        smooth=opts.smooth if opts.smooth is not None else 1.0,
-        predict=not opts.no_predict,
-    )
     reader = open_video(
         video, fps=opts.fps, deinterlace=opts.deinterlace, field_order=opts.field_order
     )
@@ -364,7 +427,9 @@ WORKFLOWS = (
         group="geometry",
         description="Per frame: detect the board (the previous frame's box first), undistort "
         "the corners with the camera file's model, solve PnP with refinement (X_cam = R X_board "
-        "+ t, r a Rodrigues vector, t in the unit of --square); frames without the board are "
-        "NaN rows. A capture device runs until Ctrl-C (or --max-frames) and prints its speed.",
+        "+ t, r a Rodrigues vector, t in the unit of --square); one ArUco marker (aruco:ID) by "
+        "IPPE-square, its mirror-tilt ambiguity settled by continuity (t in the unit of "
+        "--marker); frames without the board are NaN rows. A capture device runs until "
+        "Ctrl-C (or --max-frames) and prints its speed.",
     ),
 )
