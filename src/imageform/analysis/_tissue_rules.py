@@ -345,7 +345,7 @@ def _kept(flags: dict[str, np.ndarray], clean: np.ndarray, n_image: int) -> np.n
         # no hole test: a fold or a stroke of black ink holds paler pixels
         ok = _stroke_like(labels, count, n_image, _THIN_DARK, np.zeros(count + 1), large=False)
         size = np.bincount(labels[dark], minlength=count + 1)
-        ok |= size >= max(_LARGE, _LARGE_SHARE * n_image)
+        ok |= (size >= max(_LARGE, _LARGE_SHARE * n_image)) | (size >= n_image / 2)
         ok[0] = False
         out |= dark & ok[labels]
     return out
@@ -398,7 +398,7 @@ def keep_mask(rgb: Any, i0v: np.ndarray, params: dict[str, Any], glass: bool, be
         return _block(np.asarray(rgb), log_i0, params, glass, beta)
     reach = params["margin"] + 1 + (_STROKE_RADIUS + _STROKE_REACH if params["pen"] else 0)
     reach += int(2 * _LONG)  # the regions' shapes: read over a stroke's length
-    depth = dict.fromkeys((rgb.ndim - 3, rgb.ndim - 2), reach)
+    depth = {ax: min(reach, int(rgb.shape[ax])) for ax in (rgb.ndim - 3, rgb.ndim - 2)}
     whole = rgb.rechunk({rgb.ndim - 1: 3})
 
     def block(blk: np.ndarray) -> np.ndarray:
