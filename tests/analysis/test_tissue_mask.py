@@ -140,35 +140,81 @@ def _ihc_tile(seed: int = 0, size: int = 256, radius: int = 7, step: int = 15) -
     return np.clip(np.round(240 * np.exp(-od)), 0, 255).astype(np.uint8)
 
 
-def test_ihc_keeps_its_nuclei_with_the_dark_rule_off() -> None:
-    """On IHC pass ``tissue_mask(image, dark=False)`` (or ``mask=None``), as documented.
-
-    The default rules are H&E's: IHC hematoxylin reads as ink over tissue (OD_G < OD_R)
-    and dense DAB + hematoxylin is near-neutral (the dark rule's); when the nuclei touch,
-    the hysteresis carried the dark flags through all of them (this field: none kept by
-    default before the hysteresis needed 2 % flags in a region; 26-64 % of three of
-    DeepLIIF's Ki67 tiles dropped, benchmarks/results/stain-fresh-2026-11-30e.md; see
-    test_ihc_hematoxylin_is_not_ink_by_default). With the dark rule off every nucleus
-    stays and the stain vectors are every pixel's; nuclei 2 pixels apart keep 90 % by
-    default.
-    """
-    img = _ihc_tile()
-    glass_rule = tissue_mask(img, pen=False, dark=False)
-    no_dark = tissue_mask(img, dark=False)
-    assert no_dark[glass_rule].mean() > 0.99
-    everything = macenko_stains(img, mask=None).stain_matrix
-    assert _worst(macenko_stains(img, mask=no_dark).stain_matrix, everything) < 0.5
-    apart = _ihc_tile(step=16)
-    assert tissue_mask(apart)[tissue_mask(apart, pen=False, dark=False)].mean() > 0.85
-
-
-def test_ihc_hematoxylin_is_not_ink_by_default() -> None:
-    """The hysteresis grows only into regions where ink flags are >= 2 %: on the Ki67-like
-    field the default mask drops the dense DAB nuclei (the dark rule's, 1 in 10) and keeps
-    the rest (measured 90.1-91.9 % of the tissue over three seeds; was 0 %)."""
+def test_ihc_keeps_its_nuclei_by_default() -> None:
+    """IHC hematoxylin (no eosin) reads as ink over tissue (OD_G < OD_R) and dense DAB +
+    hematoxylin is near-neutral (the dark rule's colour); neither is an artefact by shape:
+    nuclei are blobs, a stroke is long and thin. The default mask keeps every nucleus and
+    the stain vectors are every pixel's (before the shape rules: 0 % of this field kept
+    by the hysteresis, then 90-92 % with the dense DAB dropped; 45-90 % of OpenSlide's OS-2
+    Ki67 tiles, benchmarks/results/stain-ihcmask-2026-11-30g.md)."""
     for seed in (0, 1):
         img = _ihc_tile(seed=seed)
-        assert tissue_mask(img)[tissue_mask(img, pen=False, dark=False)].mean() > 0.88
+        glass_rule = tissue_mask(img, pen=False, dark=False)
+        assert tissue_mask(img)[glass_rule].mean() > 0.99
+        everything = macenko_stains(img, mask=None).stain_matrix
+        assert _worst(macenko_stains(img).stain_matrix, everything) < 0.5
+    apart = _ihc_tile(step=16)
+    assert tissue_mask(apart)[tissue_mask(apart, pen=False, dark=False)].mean() > 0.99
+
+
+def _blue_ihc_tile(seed: int = 0, size: int = 256) -> np.ndarray:
+    """An IHC field whose hematoxylin has blue ink's colour (OD_B < 0.25 OD_R, as the
+    nuclei of OpenSlide's OS-2 Ki67 slide): touching nuclei, one in ten dense DAB."""
+    gen = np.random.default_rng(seed)
+    hema, dab = np.array([0.60, 0.40, 0.12]), np.array([1.42, 1.63, 1.72])
+    od = np.full((size, size, 3), 0.05)
+    yy, xx = np.mgrid[0:size, 0:size]
+    for cy in range(7, size, 14):
+        for cx in range(7, size, 14):
+            disc = (yy - cy) ** 2 + (xx - cx) ** 2 <= 49
+            od[disc] = dab if gen.random() < 0.1 else hema * gen.uniform(1.0, 1.8)
+    od = od * gen.normal(1.0, 0.03, od.shape)
+    return np.clip(np.round(240 * np.exp(-od)), 0, 255).astype(np.uint8)
+
+
+def _pap_tile(size: int = 256) -> np.ndarray:
+    """Papanicolaou cytology: four cells whose cyanophilic cytoplasm has blue ink's colour
+    (OD_B 0.09 OD_R, as StainNet's cervical smear), each with a purple nucleus, on glass."""
+    od = np.full((size, size, 3), 0.02)
+    yy, xx = np.mgrid[0:size, 0:size]
+    for cy, cx in ((64, 64), (70, 190), (190, 70), (185, 185)):
+        od[(yy - cy) ** 2 + (xx - cx) ** 2 <= 45**2] = (0.55, 0.40, 0.05)
+        od[(yy - cy) ** 2 + (xx - cx) ** 2 <= 9**2] = (0.80, 0.95, 0.45)
+    od = od * np.random.default_rng(0).normal(1.0, 0.03, od.shape)
+    return np.clip(np.round(240 * np.exp(-od)), 0, 255).astype(np.uint8)
+
+
+def test_stain_in_blue_ink_colour_is_kept() -> None:
+    """Blobs (nuclei, cells) in blue ink's colour are the slide's stain: kept."""
+    for img in (_blue_ihc_tile(), _pap_tile()):
+        glass_rule = tissue_mask(img, pen=False, dark=False)
+        assert tissue_mask(img, pen=True, dark=False, margin=0)[glass_rule].any()
+        assert tissue_mask(img)[glass_rule].mean() > 0.99
+
+
+@pytest.mark.parametrize(
+    ("tile", "ink"), [("pap", "blue"), ("pap", "green"), ("pap", "black"), ("ihc", "black")]
+)
+def test_ink_strokes_over_ihc_and_cytology_go(tile: str, ink: str) -> None:
+    """A stroke of ink over the same tiles is long and thin: dropped, the rest kept.
+
+    Not kept up: a blue or green stroke across the touching nuclei of the blue IHC field
+    joins their net (ink over tissue touches them) and is read as stain (1.0 and 0.94 of
+    the band kept); the documented limit of the shape rules."""
+    from scipy import ndimage
+
+    img = _blue_ihc_tile() if tile == "ihc" else _pap_tile()
+    band = _band(img.shape, 0.03)
+    keep = tissue_mask(_inked(img, band, ink))
+    assert keep[band].mean() < 0.02
+    tissue = tissue_mask(img, pen=False, dark=False)
+    if tile == "pap":  # the cells the stroke crosses go with it (ink over their cytoplasm)
+        labels, _ = ndimage.label(tissue)
+        crossed = np.unique(labels[ndimage.binary_dilation(band, iterations=2)])
+        tissue &= ~np.isin(labels, crossed)
+        assert tissue.sum() > 5000
+    rest = ~ndimage.binary_dilation(band, iterations=8) & tissue
+    assert keep[rest].mean() > 0.98
 
 
 def test_hysteresis_needs_a_share_of_ink_flags() -> None:
@@ -216,19 +262,14 @@ def test_clean_tiles_keep_their_tissue_and_stains(name: str) -> None:
     assert tissue_mask(img)[glass_rule].mean() >= 0.98
     auto = macenko_stains(img).stain_matrix
     assert _worst(auto, macenko_stains(img, mask=None).stain_matrix) < 0.5
-    # Vahadane, converged, every tissue pixel factorised: on the torchstain crop the default
-    # mask drops 28 pixels (0.04 % of the tissue) and its optimum moves 6.59 deg
-    # (check_stain_fresh.py --vahadane); SPAMS' trainDL (StainTools' engine: lambda 0.1,
-    # posAlpha, posD, 3000 rounds) on the same pixels: 6.87 deg. The 3 deg this test allowed
-    # before held by chance (200 unconverged rounds on a stride of the tissue pixels). The
-    # colon crop loses no pixel.
+    # Vahadane, converged, every tissue pixel factorised: the default mask drops no pixel of
+    # either crop. Before the shape rules it dropped 28 dark pixels (0.04 % of the tissue) of
+    # the torchstain crop and Vahadane's optimum moved 6.59 deg (SPAMS' trainDL on the same
+    # pixels: 6.87 deg; check_stain_fresh.py --vahadane): its objective is flat there.
     every = {"max_pixels": 10**6}
     auto = vahadane_stains(img, **every).stain_matrix
     moved = _worst(auto, vahadane_stains(img, mask=None, **every).stain_matrix)
-    if name == "torchstain_target_crop.png":
-        assert 5.9 < moved < 7.6  # the peer's 6.87 +- 0.7 (ours and SPAMS' differ up to 1.07)
-    else:
-        assert moved < 1e-6
+    assert moved < 1e-6  # no pixel lost (the torchstain crop lost 28 dark ones before)
 
 
 def test_glass_rule_is_the_od_norm() -> None:
@@ -255,6 +296,8 @@ def test_masks_agree_with_dask() -> None:
     da = pytest.importorskip("dask.array")
     img = _inked(_read("torchstain_target_crop.png"), _band((256, 256), 0.03), "green")
     lazy = tissue_mask(da.from_array(img, chunks=(100, 90, 3)))
+    # the shape of a region is read over 64 pixels around each chunk: a region that reaches
+    # further can be judged otherwise (none here)
     assert np.array_equal(np.asarray(lazy.compute()), tissue_mask(img))
     est = macenko_stains(da.from_array(img, chunks=(100, 90, 3)))
     assert _worst(est.stain_matrix, macenko_stains(img).stain_matrix) < 1e-6

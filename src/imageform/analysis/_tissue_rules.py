@@ -41,6 +41,11 @@ _BROWN_RATIO = 1.2
 _GREY_RATIO = 1.25
 _GREY_OD = 0.3
 
+#: The dark rule's region: luma below _NEAR_LUMA times the dark rule's, or a neutral OD
+#: with mean OD at least _NEAR_OD (the paler edge of black ink).
+_NEAR_LUMA = 2.0
+_NEAR_OD = 0.5
+
 #: Default luma of the dark rule (HistoQC: 0.15; 0.1 drops 1-3.5 % of dense nuclei).
 _DARK_LUMA = 0.08
 
@@ -53,8 +58,8 @@ _DARK_LUMA = 0.08
 _WEAK_RATIO = 1.0
 _WEAK_BLUE = 0.3
 
-#: The hysteresis adds a 4-connected region of ink over tissue only where the cleaned ink
-#: flags are at least this share of it. A marker stroke brings its flags (its dense ink, the
+#: A region of ink over tissue is ink only where the cleaned ink flags are at least this
+#: share of it (and its shape below says so). A marker stroke brings its flags (its dense ink, the
 #: ink over glass): the doc's flat stroke, HistoQC's strokes. On IHC slides hematoxylin
 #: without eosin reads as ink over tissue (17-45 % of DeepLIIF's Ki67 tiles' tissue), the
 #: nuclei touch into large regions with few flags (nuclei under OD_G < 0.5 OD_R): grown,
@@ -62,6 +67,45 @@ _WEAK_BLUE = 0.3
 #: check_stain_artefacts.py: 0.01 keeps 86-89 % of two Ki67 tiles, 0.05 turns 3 more
 #: green-ink cases of the tune half over 3 deg, 0.02 neither (but 3 more blue held-out).
 _GROW_SHARE = 0.02
+
+#: The shape rules (benchmarks/check_stain_ihc_fresh.py, stain-ihcmask-2026-11-30g.md).
+#: Colour cannot tell blue ink from IHC's hematoxylin without eosin (OS-2's Ki67 nuclei:
+#: OD_B 0.2 OD_R, blue ink's) or cytology's cyanophilic cytoplasm; shape can. A region of
+#: ink over tissue with its pen flags (joined across one pixel) is ink when the flags are
+#: _GROW_SHARE of it and it is a stroke: straight, _LONG pixels long and _ELONGATION times
+#: as long as wide by its second moments, or curved, its area over twice its largest
+#: inscribed radius (its length at that width) _LONG and _THIN (dark: _THIN_DARK) times that
+#: width with at most _HOLES holes of _HOLE_AREA pixels (touching nuclei and cells make a
+#: net, a curved stroke a line); or large and thick: _LARGE pixels and _LARGE_SHARE of the image,
+#: _LONG thick (a smear); or when _GREEN_SHARE of it is green ink and it has _GREEN_AREA
+#: pixels (OD_G < 0.5 OD_R: the stains of the tuning tiles reach 0.47 at their 1st
+#: percentile, some small Ki67 nuclei of one scanner hold 10-37 % of it), or _SOLID_SHARE
+#: flags without a hole and _SOLID_AREA pixels (a dot of ink on glass: HistoQC's blue dot
+#: 580 pixels; single Ki67 nuclei up to 419 with 49-86 % flags). Flags that form a straight
+#: stroke by themselves (joined across two pixels; _LONG long, a quarter of _LONG squared in
+#: area) take the ink over
+#: tissue _LINE_REACH pixels around them: a stroke across touching stain of its colour
+#: joins their net. Measured on the tuning tiles: Ki67 stain regions up to 11 158 pixels,
+#: 2 x inscribed radius up to 53, second-moment length/width up to 4.0 when over 1000
+#: pixels; real marker strokes 16-38 times as long as thick.
+_LONG = 24.0
+_ELONGATION = 4.5
+_THIN = 12.0
+_THIN_DARK = 6.0
+_HOLES = 3
+_HOLE_AREA = 4
+_LARGE = 16384
+_LARGE_SHARE = 0.1
+_GREEN_SHARE = 0.05
+_GREEN_AREA = 1024
+_SOLID_SHARE = 0.85
+_SOLID_AREA = 512
+_LINE_REACH = 3
+
+#: Green ink flags with OD_G below this times OD_R are ink wherever they are (HistoQC's
+#: green marker: median 0.28, 95th percentile 0.44; no stain of the tuning tiles below
+#: 0.47 at its 1st percentile).
+_DEEP_GREEN = 0.4
 
 
 #: The pen rule's stroke: a marker's stroke is a region, and inside it ink pixels over
@@ -88,26 +132,38 @@ def _od(rgb: np.ndarray, log_i0: np.ndarray) -> np.ndarray:
 
 def _artefacts(rgb: np.ndarray, od: np.ndarray, p: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     """Per-pixel flags of one block (``od``: its :func:`_od`): (artefact, ink over tissue)."""
+    flags = _flags(rgb, od, p)
+    return flags["pen"] | flags["dark"] | flags["he"], flags["weak"]
+
+
+def _flags(rgb: np.ndarray, od: np.ndarray, p: dict[str, Any]) -> dict[str, np.ndarray]:
+    """Per-pixel flags of one block by rule: pen (with its green-ink part), dark, he, weak."""
     r, g, b = od[..., 0], od[..., 1], od[..., 2]
-    bad = np.zeros(rgb.shape[:-1], dtype=bool)
-    weak = np.zeros(rgb.shape[:-1], dtype=bool)
+    shape = rgb.shape[:-1]
+    keys = ("pen", "green", "deep", "dark", "near", "he", "weak")
+    out = {k: np.zeros(shape, dtype=bool) for k in keys}
     if p["pen"]:
         strong = r >= p["pen_min_od"]
         green = g < _GREEN_RATIO * r
         blue = (b < _BLUE_RATIO * r) & (g < _BLUE_GREEN * r)
-        bad |= strong & (green | blue)
+        out["green"] = strong & green
+        out["deep"] = strong & (g < _DEEP_GREEN * r)
+        out["pen"] = strong & (green | blue)
         # ink over tissue; the pen flags are in it (OD_G < 0.5 OD_R implies OD_G < OD_R)
-        weak = strong & ((g < _WEAK_RATIO * r) | ((b < _WEAK_BLUE * r) & (g < 0.9 * r)))
+        out["weak"] = strong & ((g < _WEAK_RATIO * r) | ((b < _WEAK_BLUE * r) & (g < 0.9 * r)))
     if p.get("he", False):
         lo = np.maximum(od.min(axis=-1), 1e-6)
         grey = (od.max(axis=-1) <= _GREY_RATIO * lo) & (od.mean(axis=-1) >= _GREY_OD)
-        bad |= ((b > _BROWN_RATIO * g) & (b >= p["pen_min_od"])) | grey
+        out["he"] = ((b > _BROWN_RATIO * g) & (b >= p["pen_min_od"])) | grey
     if p["dark"]:
         luma = rgb @ _LUMA
         lo = np.maximum(od.min(axis=-1), 1e-6)
         neutral = (od.max(axis=-1) <= _NEUTRAL_RATIO * lo) & (od.mean(axis=-1) >= _NEUTRAL_OD)
-        bad |= (luma < p["dark_luminance"]) | neutral
-    return bad, weak
+        out["dark"] = (luma < p["dark_luminance"]) | neutral
+        # the dark rule's rim: its region (a stroke of black ink with its paler edge)
+        near = (od.max(axis=-1) <= _NEUTRAL_RATIO * lo) & (od.mean(axis=-1) >= _NEAR_OD)
+        out["near"] = (luma < _NEAR_LUMA * p["dark_luminance"]) | near
+    return out
 
 
 def pixel_artefacts(rgb: Any, i0v: np.ndarray, he: bool = False) -> Any:
@@ -134,33 +190,165 @@ def _cross(ndim: int) -> np.ndarray:
     return cross
 
 
-def _grow(bad: np.ndarray, weak: np.ndarray, margin: int) -> np.ndarray:
-    """Return the artefact flags cleaned, grown into ink over tissue and dilated.
+def _shape(labels: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per label (0..count) of a 2-D labelling: (area, length, width) of its pixels.
 
-    Flags without a flagged 8-neighbour are dropped (speckle); the ``weak`` regions that
-    touch what is left are added where ink flags are at least ``_GROW_SHARE`` of them
-    (hysteresis); the result grows by ``margin`` pixels.
+    Length and width are those of the rectangle with the region's second moments
+    (sqrt(12 lambda) of the covariance's eigenvalues): a straight stroke of length L and
+    width W gives L and W.
+    """
+    yy, xx = np.nonzero(labels)
+    lab = labels[yy, xx]
+    n = np.bincount(lab, minlength=count + 1).astype(np.float64)
+    m = np.maximum(n, 1.0)
+    xx, yy = xx.astype(np.float64), yy.astype(np.float64)
+    mx = np.bincount(lab, xx, count + 1) / m
+    my = np.bincount(lab, yy, count + 1) / m
+    cxx = np.bincount(lab, xx * xx, count + 1) / m - mx * mx
+    cyy = np.bincount(lab, yy * yy, count + 1) / m - my * my
+    cxy = np.bincount(lab, xx * yy, count + 1) / m - mx * my
+    half = (cxx + cyy) / 2
+    root = np.sqrt(np.maximum(half * half - (cxx * cyy - cxy * cxy), 0.0))
+    length = np.sqrt(12.0 * np.maximum(half + root, 0.0))
+    width = np.sqrt(12.0 * np.maximum(half - root, 1.0 / 12.0))
+    return n, length, width
+
+
+def _regions(mask: np.ndarray, structure: np.ndarray) -> tuple[np.ndarray, int]:
+    from scipy import ndimage
+
+    labels, count = ndimage.label(mask, structure=structure)
+    return labels, int(count)
+
+
+def _holes(joined: np.ndarray, count: int) -> np.ndarray:
+    """Per label of ``joined`` (0..count): its holes of at least ``_HOLE_AREA`` pixels."""
+    from scipy import ndimage
+
+    solid = joined > 0
+    holes = ndimage.binary_fill_holes(solid) & ~solid
+    out = np.zeros(count + 1, dtype=np.int64)
+    if not holes.any():
+        return out
+    hl, hc = ndimage.label(holes)
+    area = np.bincount(hl.reshape(-1), minlength=hc + 1)
+    around = ndimage.grey_dilation(joined, size=(3, 3))
+    owner = np.asarray(ndimage.maximum(around, hl, index=np.arange(1, hc + 1)), dtype=np.int64)
+    big = area[1:] >= _HOLE_AREA
+    np.add.at(out, owner[big], 1)
+    return out
+
+
+def _stroke_like(
+    labels: np.ndarray,
+    count: int,
+    n_image: int,
+    thin: float,
+    holes: np.ndarray,
+    large: bool = True,
+) -> np.ndarray:
+    """Per label: a long, thin region (a stroke, straight or curved, a ring) or a large one.
+
+    Straight: its second moments' length at least ``_LONG`` and ``_ELONGATION`` times its
+    width. Curved: its area over twice its largest inscribed radius (the length of a
+    stroke of that width) at least ``_LONG`` and ``thin`` times that width, with at most
+    ``_HOLES`` holes (``holes``, per label): a curved stroke is a line, touching nuclei
+    and cells make a net (thin by that measure too, but not straight).
+    Large: ``_LARGE`` pixels and ``_LARGE_SHARE`` of the image, at least ``_LONG`` thick.
     """
     from scipy import ndimage
 
+    area, length, width = _shape(labels, count)
+    straight = (length >= _LONG) & (length >= _ELONGATION * width)
+    inside = ndimage.distance_transform_edt(labels > 0)
+    radius = np.zeros(count + 1)
+    radius[1:] = ndimage.maximum(inside, labels, index=np.arange(1, count + 1))
+    thick = 2.0 * np.maximum(radius, 0.5)
+    curved = (area >= _LONG * thick) & (area >= thin * thick * thick)
+    out = straight | (curved & (holes <= _HOLES))
+    if large:
+        out |= (area >= max(_LARGE, _LARGE_SHARE * n_image)) & (thick >= _LONG)
+    return out
+
+
+def _grow(flags: dict[str, np.ndarray], margin: int) -> np.ndarray:
+    """Return the artefacts: flags cleaned, judged by their regions' shapes, dilated.
+
+    Flags without a flagged 8-neighbour are dropped (speckle). The pen flags and the ink
+    over tissue (``weak``) form regions (:func:`_kept`): ink where the pen flags are at
+    least ``_GROW_SHARE`` of one and it is a stroke (long and thin, or large), or holds
+    green ink or a dot of ink; elsewhere the flags are the slide's own stain (IHC's
+    hematoxylin without eosin, cytology's cyanophilic cytoplasm), whose blobs are nuclei
+    and cells. Dark flags are an artefact where their region is a stroke or large (black
+    ink, a fold), not the blobs of dense nuclei. The H&E rules' flags are kept as they
+    are. The stroke windows (:func:`_stroke`) follow; the result grows by ``margin``.
+    """
+    from scipy import ndimage
+
+    bad = flags["pen"] | flags["dark"] | flags["he"]
     if bad.ndim < 2 or not bad.any():
-        return bad
+        return np.zeros(bad.shape, dtype=bool)
     cross = _cross(bad.ndim)
     square = np.zeros((3,) * bad.ndim, dtype=np.uint8)
     square[(1,) * (bad.ndim - 2) + (slice(None), slice(None))] = 1
     n = ndimage.convolve(bad.astype(np.uint8), square, mode="constant")
-    core = bad & (n >= 2)
-    if weak.any() and core.any():
-        labels, count = ndimage.label(weak | core, structure=cross)
-        size = np.bincount(labels.reshape(-1), minlength=count + 1)
-        flags = np.bincount(labels[core & weak], minlength=count + 1)
-        hit = np.flatnonzero(flags >= _GROW_SHARE * size)
-        core |= np.isin(labels, hit[hit > 0])
+    clean = bad & (n >= 2)
+    core = clean & flags["he"]
+    n_image = bad.shape[-1] * bad.shape[-2]
+    for idx in np.ndindex(bad.shape[:-2]):
+        core[idx] |= _kept({k: v[idx] for k, v in flags.items()}, clean[idx], n_image)
+    weak = flags["weak"]
     if weak.any() and core.any():
         core |= _stroke(core & weak, weak | core)
     if margin == 0:
         return core
     return ndimage.binary_dilation(core, structure=cross, iterations=margin)
+
+
+def _kept(flags: dict[str, np.ndarray], clean: np.ndarray, n_image: int) -> np.ndarray:
+    """Return the pen regions that are ink and the dark flags that are artefacts (2-D)."""
+    out = np.zeros(clean.shape, dtype=bool)
+    # the seeds: pen flags, and dark flags in ink over tissue (dense ink over tissue is dark)
+    pen = clean & (flags["pen"] | (flags["dark"] & flags["weak"]))
+    if pen.any():
+        from scipy import ndimage
+
+        weak = flags["weak"] | pen
+        # a stroke's pale pixels split it into pieces: joined across one pixel
+        joined = ndimage.binary_dilation(weak, structure=np.ones((3, 3), dtype=bool))
+        whole, count = _regions(joined, _cross(2))
+        labels = np.where(weak, whole, 0)
+        size = np.bincount(labels.reshape(-1), minlength=count + 1)
+        share = np.bincount(labels[pen], minlength=count + 1) / np.maximum(size, 1)
+        green = np.bincount(labels[pen & flags["green"]], minlength=count + 1)
+        holes = _holes(whole, count)
+        ok = share >= _GROW_SHARE
+        ok &= (
+            _stroke_like(labels, count, n_image, _THIN, holes)
+            | ((green >= _GREEN_SHARE * size) & (size >= _GREEN_AREA))
+            | ((share >= _SOLID_SHARE) & (size >= _SOLID_AREA) & (holes == 0))
+        )
+        ok[0] = False
+        out |= ok[labels] | (pen & flags["deep"])
+        # a stroke over touching stain of its colour joins their net: its flags alone, joined
+        # across two pixels, make a straight stroke; it goes with the ink over tissue around it
+        fl, fc = _regions(ndimage.binary_dilation(pen, np.ones((5, 5), dtype=bool)), _cross(2))
+        area, length, width = _shape(fl, fc)
+        line = (length >= _LONG) & (length >= _ELONGATION * width) & (area >= _LONG * _LONG / 4)
+        line[0] = False
+        if line.any():
+            near = ndimage.binary_dilation(line[fl], _cross(2), iterations=_LINE_REACH)
+            out |= near & weak
+    dark = clean & flags["dark"]
+    if dark.any():
+        labels, count = _regions(dark | flags["near"], np.ones((3, 3), dtype=bool))
+        # no hole test: a fold or a stroke of black ink holds paler pixels
+        ok = _stroke_like(labels, count, n_image, _THIN_DARK, np.zeros(count + 1), large=False)
+        size = np.bincount(labels[dark], minlength=count + 1)
+        ok |= (size >= max(_LARGE, _LARGE_SHARE * n_image)) | (size >= n_image / 2)
+        ok[0] = False
+        out |= dark & ok[labels]
+    return out
 
 
 def _stroke(ink: np.ndarray, weak: np.ndarray) -> np.ndarray:
@@ -186,7 +374,7 @@ def _block(
     rgb: np.ndarray, log_i0: np.ndarray, p: dict[str, Any], glass: bool, beta: float
 ) -> np.ndarray:
     od = _od(rgb, log_i0)
-    keep = ~_grow(*_artefacts(rgb, od, p), p["margin"])
+    keep = ~_grow(_flags(rgb, od, p), p["margin"])
     if glass:
         keep &= (od * od).sum(axis=-1) >= beta * beta
     return keep
@@ -209,7 +397,8 @@ def keep_mask(rgb: Any, i0v: np.ndarray, params: dict[str, Any], glass: bool, be
     if not is_dask(rgb):
         return _block(np.asarray(rgb), log_i0, params, glass, beta)
     reach = params["margin"] + 1 + (_STROKE_RADIUS + _STROKE_REACH if params["pen"] else 0)
-    depth = dict.fromkeys((rgb.ndim - 3, rgb.ndim - 2), reach)
+    reach += int(2 * _LONG)  # the regions' shapes: read over a stroke's length
+    depth = {ax: min(reach, int(rgb.shape[ax])) for ax in (rgb.ndim - 3, rgb.ndim - 2)}
     whole = rgb.rechunk({rgb.ndim - 1: 3})
 
     def block(blk: np.ndarray) -> np.ndarray:

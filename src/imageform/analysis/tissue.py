@@ -31,12 +31,19 @@ TISSUE_MASK_RULES: MappingProxyType[str, str] = MappingProxyType(
         "glass": "optical density ||OD||_2 < beta: glass, unstained (Macenko's transparent pixels)",
         "pen": "green, cyan and blue marker ink: OD_red >= pen_min_od and OD_green < "
         "0.5 OD_red (green ink) or OD_blue < 0.25 OD_red with OD_green < 0.8 OD_red (blue "
-        "ink); H&E and DAB absorb green at least half as much as red; grown into a region of "
-        "ink over tissue (OD_green < OD_red) that touches it where ink flags are >= 2 % of "
-        "the region (not IHC's hematoxylin), and over the stroke: a 7 x 7 window with at "
-        "least 35 % ink over tissue or flags and 8 % ink flags is ink, with a pixel around it",
-        "dark": "black ink, dark folds, debris: luminance < dark_luminance (HistoQC's dark "
-        "tissue rule), or a neutral OD (max/min over the channels <= 1.5) with mean OD >= 1",
+        "ink); H&E and DAB absorb green at least half as much as red. By shape, as IHC's "
+        "hematoxylin and cytology's cytoplasm can have blue ink's colour: the flags and the "
+        "ink over tissue (OD_green < OD_red) around them form a region, ink where flags are "
+        ">= 2 % of it and it is a stroke (long and thin, straight or curved, at most 3 "
+        "holes), large and thick, >= 5 % green ink (>= 1024 pixels) or >= 85 % flags with "
+        "no hole (>= 512 pixels); a straight stroke of flags takes the ink over tissue 3 "
+        "pixels around it; flags with OD_green < 0.4 OD_red are ink anywhere; else stain "
+        "(nuclei, cells and their nets). Over the stroke: a 7 x 7 window with >= 35 % ink "
+        "over tissue or ink and 8 % ink is ink, with a pixel around it",
+        "dark": "black ink, dark folds, debris: luma < dark_luminance (HistoQC's dark "
+        "tissue rule), or a neutral OD (max/min over the channels <= 1.5) with mean OD >= 1; "
+        "where its region (with the paler rim: luma < 2 dark_luminance, or neutral with mean "
+        "OD >= 0.5) is a stroke or its flags large: the dense DAB of IHC nuclei is a blob",
         "he": "H&E slides only (he=True; DAB is brown and hematoxylin + DAB grey): yellow, "
         "orange and brown margin dye and pigment, OD_blue > 1.2 OD_green with OD_blue >= "
         "pen_min_od; grey (label, slide edge, dirt), max/min of the ODs <= 1.25 with mean "
@@ -73,38 +80,53 @@ def tissue_mask(
       blue, :math:`OD_B < 0.25\, OD_R` with :math:`OD_G < 0.8\, OD_R` (HistoQC's blue
       ink: a median 0.12, 95th percentile 0.24; IHC's hematoxylin, without eosin, reaches
       0.28); with :math:`OD_R \ge` ``pen_min_od`` (pale pink pixels have small, noisy
-      ratios). Ink over tissue adds the tissue's OD: the flags grow (hysteresis,
-      4-connected) into a touching region of pixels with :math:`OD_G < OD_R`, or
-      :math:`OD_B < 0.3\, OD_R` with :math:`OD_G < 0.9\, OD_R`, where the ink flags are
-      at least 2 % of the region: a stroke brings its own flags, while IHC's hematoxylin
-      (no eosin) has that colour across touching nuclei with few flags. A stroke is a
-      region: inside it, pale ink over eosin reads as tissue and dense blue or green ink
-      over eosin as hematoxylin, and a few
-      such pixels, dense, tilt the stain plane; so a 7 × 7 window where at least 35 % of
-      the pixels are ink over tissue or flags and 8 % are ink flags (the dark rule's do
-      not count) is ink as a whole, with one pixel around it (tuned on one half of
-      HistoQC's hand-masked strokes, checked on the other). Red ink is eosin's colour
-      and is not found (as in HistoQC, which needs a model of its own for it).
+      ratios). Colour alone cannot tell blue ink from IHC's hematoxylin without eosin
+      (OpenSlide's OS-2 Ki67 nuclei reach OD_B 0.2 OD_R) or from cytology's cyanophilic
+      cytoplasm; shape can: a marker's stroke is long and thin, nuclei and cells are
+      blobs and their nets have holes. The cleaned flags and the ink over tissue touching
+      them (:math:`OD_G < OD_R`, or :math:`OD_B < 0.3\, OD_R` with
+      :math:`OD_G < 0.9\, OD_R`; joined across one pixel, 4-connected) form regions; a
+      region is ink where the flags are at least 2 % of it and it is a stroke - straight
+      (second moments: at least 24 pixels long and 4.5 times as long as wide) or curved
+      (its area over twice its largest inscribed radius at least 24 and 12 times that
+      width), with at most 3 holes -, or large (16 384 pixels and a tenth of the image, at
+      least 24 thick), or holds 5 % green ink (1024 pixels or more), or 85 % flags without
+      a hole (512 pixels or more: a dot of ink). Flags that form a straight stroke by
+      themselves (a stroke across touching stain joins its net) take the ink over tissue
+      3 pixels around them; flags with :math:`OD_G < 0.4\, OD_R` (green ink; no stain
+      of the tuning tiles) are ink anywhere. The other flags are the slide's stain. Inside
+      a stroke, pale ink over eosin reads as tissue and dense blue or green ink over eosin
+      as hematoxylin, and a few such pixels, dense, tilt the stain plane; so a 7 × 7
+      window where at least 35 % of the pixels are ink over tissue or ink and 8 % are ink
+      is ink as a whole, with one pixel around it. Red ink is eosin's colour and is not
+      found (as in HistoQC, which needs a model of its own for it). Tuned on spent tiles
+      (``benchmarks/check_stain_ihc_fresh.py``, ``check_stain_artefacts.py``).
     - **dark** (``dark``): black ink, folds and debris: luma :math:`0.2125R + 0.7154G +
       0.0721B <` ``dark_luminance`` of the encoded values (HistoQC's dark-tissue rule, at
       0.15 there: 0.08 here, as 0.1-0.15 drops 1-3.5 % of the dense nuclei of real tiles),
       or a neutral OD, :math:`\max_c OD_c \le 1.5 \min_c OD_c` with mean OD ≥ 1 (black
-      ink over tissue; stains are tinted, hematoxylin's OD spans 2.4x). On IHC, dense
-      hematoxylin + DAB is near-neutral and can be dropped: ``dark=False`` there.
+      ink over tissue; stains are tinted, hematoxylin's OD spans 2.4x). Dense DAB +
+      hematoxylin is near-neutral too, but as blobs: the flags are an artefact where
+      their region (8-connected, with its paler rim: luma below twice
+      ``dark_luminance`` or a neutral OD with mean OD ≥ 0.5) is a stroke as above (6
+      times as long as wide when curved; no hole test: a fold holds paler pixels), or
+      where the flags of a region are large.
     - **he** (``he``, off by default): H&E slides only. Yellow, orange and brown margin
       dye and pigment, :math:`OD_B > 1.2\, OD_G` (H&E absorb green more than blue), and
       grey (a label, the slide's edge, dirt): :math:`\max_c OD_c \le 1.25 \min_c OD_c`
       with mean OD ≥ 0.3. DAB is brown and hematoxylin + DAB grey: off for IHC.
 
-    A flag without a flagged neighbour (8-connected) is dropped as speckle, the rest grow
-    by ``margin`` pixels (4-connected), which takes the stroke's blended rim with it.
+    A flag without a flagged neighbour (8-connected) is dropped as speckle, the artefacts
+    grow by ``margin`` pixels (4-connected), which takes the stroke's blended rim with it.
+    The shape rules are in pixels, tuned on 224-2000 pixel tiles at 0.25-0.5 µm per pixel
+    and slide thumbnails.
 
     Parameters
     ----------
     image : array_like, shape (..., H, W, 3)
         Encoded RGB of a bright-field slide (uint8/uint16/floats in [0, 1]) or Dask
-        (lazy; the rules are per pixel and the morphology reads ``margin + 1`` pixels
-        across chunk edges).
+        (lazy; the morphology and the regions' shapes are read 48 pixels and more across
+        chunk edges: a region that reaches further may be judged otherwise).
     glass, pen, dark : bool
         Which rules apply (``he`` below).
     i0 : "auto" or float or sequence of 3 floats
