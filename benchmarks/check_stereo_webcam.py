@@ -81,6 +81,35 @@ from imageform.geometry.checkerboard import set_pattern_size  # noqa: E402
 
 #: the held-out folder's digest (``check_stereo_fresh._digest``), frozen before any run
 HELDOUT_DIGEST = "72ff8639f761fe919527c88f028238a850b0f8b5447730a4483b58ffa2931d10"
+#: the held-out files' SHA-256 (``sha256sum`` in byte order; their listing's digest above)
+HELDOUT_FILES = (
+    "cfdf54bf71401cbd6320a0f91b5fcc44a8212c30fa7aeb7ff07300b8575bc1d1  left01.jpg",
+    "12140957203f2180a6c41f80a95185a58067085d88047e81f4c72393f8f9edc1  left02.jpg",
+    "9ce34f22fc3d5237e82e73e00d12517016e7b7d19fb0e70a71a03eeebd22142f  left03.jpg",
+    "d9476d41b64a76fa436089f57f74f2bbebb962cc85bec99b9d6615e964035a54  left04.jpg",
+    "b85dcb5cdec191cc1009011fe567a7b957fe2495f39dedbe04e9e00a54ac573b  left05.jpg",
+    "c71a42fb7aa572f1103c692f2a358afbf05a29d970c038299243b8ae20c2ccf1  left06.jpg",
+    "2487b7a784c5b31f7b4176766a000ffd31eb594ac19454535c573a31f0848722  left07.jpg",
+    "171653591ce8e8733d22af45543a1abd1dbd62f3a76b96c26a8afaf749fa1565  left08.jpg",
+    "ac84dfbb0bd8e95a75d0b9c7c7e8671edd83f4a33122dbbed09a4b1d3fa16984  left09.jpg",
+    "e9c198ecb59dd537f0596744d3d52bea16a7c683efdbec928154849bb9193839  left10.jpg",
+    "914afa851d83ec740e665a41b3eb5280339acbecf9dcd7e9f4530885f009083a  left11.jpg",
+    "251a45161f2d6786cb83ddf3e59eda780ba8a79a1edbd1af7dbde84c4233e358  left12.jpg",
+    "8b4baf115581cd840e652fd066a900af2712e18525567eb518124da8dae89483  left13.jpg",
+    "36f01667519f061c8f1298879538b2670ecd20d41ad92bfa6864acf4df5a235b  right01.jpg",
+    "93e499f49a588efffb6284774416e802c5ba2e91605a9b7b40be991b53cb8cdf  right02.jpg",
+    "72ef3a03fa4e810480c7ed24423ae717fbc78d04b3296d6e4e0c2f770013debc  right03.jpg",
+    "e944164687e9b4bc179b53580a77ab11894e738824ff14584623c49259d77552  right04.jpg",
+    "878722c21ecaa679cff636c03520dbea32eac5be1a095da09e472ed866fbdbe6  right05.jpg",
+    "469b739f744016bcb8a70efae393dd1a8c868ea20b24fcc81c0b92f8e9f072db  right06.jpg",
+    "6d2a40e4c748ce116dd8111353eb6cccb0950b8442cfe1797bbcfc61739402aa  right07.jpg",
+    "c5d10dd47f882e167e3621d056a950f9f08adced2ee09c29a807a82167a50dab  right08.jpg",
+    "bd75ed31aabe72eeeaf850417814e24553f520dcb764e5c38fd0728e0983f1c5  right09.jpg",
+    "be54cdc5e032ad4c2fd6592b742998e5b3ae2d7e7087fd1da3ea0f9ab057766e  right10.jpg",
+    "371f9639040afed2fff3c8646a8c61d2d3330fe455c4b4adadd45afca41964cc  right11.jpg",
+    "bdb88eb8c875cbff2f799156ef2f2e23a587dc72ee629da273364ff91a223b0f  right12.jpg",
+    "c0ef9f3acedd8bb14a263e335e901c9c8261fb8e716103c739df4d2f87d92104  right13.jpg",
+)
 #: the board sets of ``check_stereo_fresh.py`` (all seen before: tuning)
 BOARDS = ("davinci", "webcam-1", "webcam-2", "ximea")
 BEFORE = "imageform cost_window 1 (before)"
@@ -341,7 +370,8 @@ def _report(parts: dict[str, list[str]], load0: str, runs: int) -> str:
         *parts.get("middlebury", []),
     ]
     if "heldout" in parts:
-        lines += ["", *parts["heldout"]]
+        lines += ["", *parts["heldout"], "", "The held-out files' SHA-256 (frozen before the run):"]
+        lines += ["", "```", *HELDOUT_FILES, "```"]
     lines += [
         "",
         f"CPU time of the matching alone, one thread each, median of {runs} interleaved "
