@@ -67,7 +67,8 @@ printed).
         --middlebury-2003 /tmp/acv-testdata --runs 9 \\
         --out benchmarks/results/stereo-depth-2026-11-30e.md
 
-(``stereo-depth-2026-11-30d.md``, the plain census as the default, came from the same command.)
+(``stereo-depth-2026-11-30d.md``, the plain census as the default, came from the same command;
+``stereo-depth-2026-11-30g.md`` with ``cost_window=3`` as the default.)
 """
 
 from __future__ import annotations
@@ -92,6 +93,8 @@ from imageform.geometry import stereo_disparity  # noqa: E402
 BLOCK = 5
 #: the label of the plain census (``census_step=None``), the default before 2026-11-30
 PLAIN = "imageform plain census (before 2026-11-30)"
+#: the label of the pixel costs alone (``cost_window=1``), the default before 2026-11-30g
+PIXEL = "imageform cost_window 1 (before 2026-11-30g)"
 #: the 2003 / 2001 pairs of ``--middlebury-2003``: left, right, truth, its scale, disparities
 PAIRS_2003 = {
     "teddy": ("im2.png", "im6.png", "disp2.png", 4, 64),
@@ -309,6 +312,7 @@ def main() -> None:
     _ours(pairs["rendered"], census_step=None)
     methods = {
         "imageform": lambda p: _ours(p),
+        PIXEL: lambda p: _ours(p, cost_window=1),
         PLAIN: lambda p: _ours(p, census_step=None),
         "imageform parabola": lambda p: _ours(p, subpixel="parabola"),
         "imageform adaptive_p2": lambda p: _ours(p, adaptive_p2=True),
@@ -325,8 +329,10 @@ def main() -> None:
         f"numpy {np.__version__}, OpenCV {cv2.__version__}; block 5, uniqueness 10 %, "
         "left-right check 1 px, no speckle filter; scores over the non-occluded pixels with a "
         "truth, off the left band of num_disparities columns. imageform: its defaults (the "
-        "graded census, census_step 4, and the equiangular sub-pixel fit); imageform plain "
-        "census (before 2026-11-30): census_step None, the default before; imageform "
+        "graded census, census_step 4, its costs summed over 3 x 3 pixels, cost_window 3, and "
+        "the equiangular sub-pixel fit); imageform cost_window 1 (before 2026-11-30g): each "
+        "pixel's cost alone, the default before; imageform plain "
+        "census (before 2026-11-30): census_step None (with cost_window 3); imageform "
         "parabola: the parabola (OpenCV's fit, imageform's before). Adirondack's truth: its "
         "PNG + 0.5 px (the PNG holds the disparity truncated, see below).",
         "",
@@ -378,7 +384,7 @@ def main() -> None:
     ]
     for name in ("rendered", "rendered-radiometric"):
         pair = pairs[name]
-        for method in ("imageform", PLAIN, "imageform parabola", "OpenCV SGBM MODE_HH"):
+        for method in ("imageform", PIXEL, PLAIN, "imageform parabola", "OpenCV SGBM MODE_HH"):
             d = results[name][method]
             t = pair["truth"]
             ok = _region(pair) & np.isfinite(d) & (np.abs(d - t) < 1)

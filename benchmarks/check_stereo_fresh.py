@@ -80,7 +80,9 @@ What is measured, per board set:
         python benchmarks/check_stereo_fresh.py /tmp/stereofresh --half all \\
         --acv /tmp/acv-testdata --out benchmarks/results/stereo-fresh-2026-11-30f.md
 
-(``stereo-fresh-2026-11-30e.md``, the plain census as the default, came from the same command.)
+(``stereo-fresh-2026-11-30e.md``, the plain census as the default, came from the same command;
+``stereo-fresh-2026-11-30g.md`` with ``cost_window=3``, the costs summed over 3 x 3 pixels, as
+the default.)
 
 ``--acv`` (r09921135/acv's ``hw4/testdata/``, see ``check_stereo_depth.py``) adds the
 Middlebury tsukuba analysis: where imageform's > 1 px errors lie against OpenCV's, and the
@@ -647,7 +649,9 @@ def main() -> None:
         "",
         f"numpy {np.__version__}, OpenCV {cv2.__version__}; sets: {args.half} "
         f"(benchmarks/check_stereo_fresh.py names their sources); load before: {load0}. "
-        "imageform: stereo_disparity's defaults (the graded census, census_step 4); "
+        "imageform: stereo_disparity's defaults (the graded census, census_step 4, the costs "
+        "summed over 3 x 3 pixels, cost_window 3: the default since 2026-11-30g; "
+        "benchmarks/check_stereo_webcam.py compares cost_window 1, the default before); "
         f"{PLAIN}: census_step None, the default before; census_threshold "
         f"{THRESHOLD:g}: with the default census_step.",
         "",

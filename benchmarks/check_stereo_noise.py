@@ -62,6 +62,10 @@ of the graded and the plain census (the machine is shared: its load is printed).
 
     ... --heldout /tmp/stereonoise/heldout --half all \\
         --out benchmarks/results/stereo-noise-2026-11-30e.md
+
+(``stereo-noise-2026-11-30g.md``: ``--half held-out`` with ``cost_window=3``, the costs summed
+over 3 x 3 pixels, as the default, beside ``cost_window=1``, the default before: the held-out
+tables alone, the tuning ones being ``check_stereo_webcam.py``'s.)
 """
 
 from __future__ import annotations
@@ -147,12 +151,20 @@ TUNING: dict[str, Fn] = {
     "plain, threshold 4": _ours(census_step=None, census_threshold=4.0),
     "graded, step 2": _ours(census_step=2.0),
     "graded, step 4 (default)": _ours(),
+    "graded, step 4, cost_window 1 (before 2026-11-30g)": _ours(cost_window=1),
     "graded, step 8": _ours(census_step=8.0),
     "AD-Census (lambda 12, 20)": _ad_census(),
     "OpenCV SGBM MODE_HH": fresh._sgbm,
 }
 #: the secondary and held-out comparison
-FINAL = {k: TUNING[k] for k in ("plain census (before)", "graded, step 4 (default)")}
+FINAL = {
+    k: TUNING[k]
+    for k in (
+        "plain census (before)",
+        "graded, step 4, cost_window 1 (before 2026-11-30g)",
+        "graded, step 4 (default)",
+    )
+}
 FINAL["OpenCV SGBM MODE_HH"] = fresh._sgbm
 
 
@@ -270,6 +282,51 @@ def _load() -> str:
     return " / ".join(f"{v:.1f}" for v in os.getloadavg()) if hasattr(os, "getloadavg") else ""
 
 
+def _heldout_only(args: Any, load0: str) -> None:
+    """Print (and write) the held-out tables alone, the cost_window 1 row beside the default."""
+    import cv2
+
+    if args.heldout is None:
+        raise SystemExit("--half held-out needs --heldout")
+    held = _heldout(args.heldout)
+    lines = [
+        "# The graded census on the held-out Middlebury 2005 / 2006 scenes, re-run",
+        "",
+        f"numpy {np.__version__}, OpenCV {cv2.__version__}; block 5, uniqueness 10 %, "
+        "left-right check 1 px, no median, no speckle filter (OpenCV: P1 8·25, P2 32·25, "
+        "MODE_HH); benchmarks/check_stereo_noise.py --half held-out; load before: "
+        f"{load0}. The held-out set of stereo-noise-2026-11-30e.md (spent there), re-run with "
+        "the costs summed over 3 x 3 pixels (cost_window 3, the default since 2026-11-30g) "
+        "beside cost_window 1 (the default before); the plain census row sums over 3 x 3 too. "
+        "Middlebury 2005 / 2006 scenes at half size (truth disp1.png / 2), non-occluded "
+        "pixels off the invalid band:",
+        "",
+        "| pair | set | method | density | > 1 px | > 3 px | MAE px |",
+        "|---|---|---|---:|---:|---:|---:|",
+    ]
+    pooled: dict[str, list[tuple[float, ...]]] = {k: [] for k in FINAL}
+    for name, p in held.items():
+        for k, fn in FINAL.items():
+            sc = depth._scores(fn(p["left"], p["right"], 0, p["n"]), p)
+            pooled[k].append(sc)
+            lines.append(
+                f"| {name} | {p['set']} | {k} | {100 * sc[0]:.1f} % | {100 * sc[1]:.2f} % | "
+                f"{100 * sc[3]:.2f} % | {sc[4]:.3f} |"
+            )
+    lines += ["", "| held out, mean of the 6 pairs | density | > 1 px | > 3 px | MAE px |"]
+    lines += ["|---|---:|---:|---:|---:|"]
+    for k, scs in pooled.items():
+        a = np.array(scs).mean(axis=0)
+        lines.append(
+            f"| {k} | {100 * a[0]:.1f} % | {100 * a[1]:.2f} % | {100 * a[3]:.2f} % | {a[4]:.3f} |"
+        )
+    lines += ["", f"load after: {_load()}"]
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if args.out is not None:
+        args.out.write_text(text)
+
+
 def main() -> None:
     """Print (and write with ``--out``) the tables."""
     import cv2
@@ -279,7 +336,7 @@ def main() -> None:
     ap.add_argument("--middlebury", type=Path, required=True, help="2b-t's data/ folder")
     ap.add_argument("--middlebury-2003", type=Path, required=True, help="acv's hw4/testdata/")
     ap.add_argument("--heldout", type=Path, help="the held-out scenes' folder")
-    ap.add_argument("--half", choices=("tuning", "all"), default="tuning")
+    ap.add_argument("--half", choices=("tuning", "all", "held-out"), default="tuning")
     ap.add_argument("--runs", type=int, default=5, help="timed runs of each census")
     ap.add_argument("--out", type=Path, help="write the markdown tables here too")
     args = ap.parse_args()
@@ -287,6 +344,9 @@ def main() -> None:
     stereo_disparity(np.zeros((40, 60)), np.zeros((40, 60)), num_disparities=16)  # compile
     stereo_disparity(np.zeros((40, 60)), np.zeros((40, 60)), num_disparities=16, census_step=None)
     load0 = _load()
+    if args.half == "held-out":  # the held-out tables alone (a re-run with a later default)
+        _heldout_only(args, load0)
+        return
     boards = {"davinci": _boards(args.fresh / "davinci", "davinci")}
     mb = args.middlebury
     tuning = {
@@ -307,7 +367,9 @@ def main() -> None:
         f"numpy {np.__version__}, OpenCV {cv2.__version__}; block 5, uniqueness 10 %, "
         "left-right check 1 px, no median, no speckle filter (OpenCV: P1 8·25, P2 32·25, "
         "MODE_HH); benchmarks/check_stereo_noise.py names the data; load before: "
-        f"{load0}.",
+        f"{load0}. Every imageform row but the cost_window 1 one sums its costs over 3 x 3 "
+        "pixels (cost_window 3, the default since 2026-11-30g; stereo-noise-2026-11-30e.md's "
+        "rows are cost_window 1).",
         "",
         "Noise sigma (grey levels) by Immerkaer's operator, the mean of both views (the first "
         "6 pairs of a board set): from the mean of its absolute value and from its median "

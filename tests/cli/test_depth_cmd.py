@@ -171,6 +171,29 @@ def test_depth_census_step_option(files: tuple[Path, StereoScene], tmp_path: Pat
     assert main([*base, "--census-step", "-1", "-o", str(tmp_path / "x.npy")]) == 2
 
 
+def test_depth_cost_window_option(
+    files: tuple[Path, StereoScene], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--cost-window reaches stereo_disparity: 3 is the default, 1 each pixel's cost alone (a
+    different map); a block too large is a usage error (exit 2), an even one refused (as an
+    even --block-size), each in one line."""
+    d, _ = files
+    base = ["depth", str(d / "left.png"), str(d / "right.png"), "--camera", str(d / "rig.toml")]
+    base += ["--num-disparities", "48", "--disparity"]
+    maps = []
+    for extra in ([], ["--cost-window", "3"], ["--cost-window", "1"]):
+        out = tmp_path / f"w{len(maps)}.npy"
+        assert main([*base, *extra, "-o", str(out)]) == 0
+        maps.append(np.load(out))
+    np.testing.assert_array_equal(maps[0], maps[1])
+    assert not np.array_equal(maps[0], maps[2], equal_nan=True)
+    for bad, code in (("2", 1), ("9", 2)):
+        capsys.readouterr()
+        assert main([*base, "--cost-window", bad, "-o", str(tmp_path / "x.npy")]) == code
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "cost_window" in err[0].replace("-", "_"), err
+
+
 #: the vertical rig: the right camera 60 mm below the left (or above: y negated), turned 2 deg
 R_VERT = np.asarray(rvec_to_matrix([0.02, 0.01, -0.03]))
 T_VERT = np.array([1.5, -60.0, 2.0])

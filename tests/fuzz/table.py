@@ -1269,7 +1269,12 @@ VALID.update(
             V("K"), V("brown"), V("K"), V("brown"), (8, 6), V("R"), np.array([-0.1, 0.0, 0.0])
         ),
         "imageform.geometry.stereo_disparity": call(
-            V("gray"), V("gray"), num_disparities=4, block_size=3, census_threshold=1.0
+            V("gray"),
+            V("gray"),
+            num_disparities=4,
+            block_size=3,
+            census_threshold=1.0,
+            cost_window=5,
         ),
         "imageform.geometry.disparity_to_depth": call(
             np.array([[8.0, 4.0, 2.0], [1.0, 16.0, 8.0]]),

@@ -275,16 +275,71 @@ def test_grey_colour_and_integer_images(small) -> None:  # type: ignore[no-untyp
 
 
 def test_default_penalties(small) -> None:  # type: ignore[no-untyped-def]
-    """p1 = a third of the code's bits ((block_size² - 1) // 3 plain, twice that graded),
+    """p1 = a third of the code's bits ((block_size² - 1) // 3 plain, twice that graded)
+    times cost_window² / q (q the least divisor keeping the block's largest sum within 191),
     p2 = 4 p1, or 32 p1 with the adaptive P2."""
     L, R = small.left, small.right
-    cases = [(3, 2, None), (5, 8, None), (7, 16, None), (3, 5, 4.0), (5, 16, 4.0), (7, 16, 4.0)]
-    for bs, p1, step in cases:
+    cases = [(3, 2, None, 1), (5, 8, None, 1), (7, 16, None, 1), (3, 5, 4.0, 1)]
+    cases += [(5, 16, 4.0, 1), (7, 16, 4.0, 1)]
+    # cost_window 3: q = ceil(9 nbits / 191): 8 bits 1, 24 bits 2, 48 bits 3
+    cases += [(3, 18, None, 3), (5, 8 * 9 // 2, None, 3), (5, 48, 4.0, 3), (7, 48, None, 3)]
+    # cost_window 5 and 7 on 48 bits: q = 7 and 13
+    cases += [(5, 16 * 25 // 7, 4.0, 5), (5, 16 * 49 // 13, 4.0, 7)]
+    for bs, p1, step, cw in cases:
         for adaptive, p2 in ((False, 4 * p1), (True, 32 * p1)):
             kw = {"num_disparities": 16, "block_size": bs, "adaptive_p2": adaptive}
+            kw["cost_window"] = cw
             ref = stereo_disparity(L, R, p1=p1, p2=p2, census_step=step, **kw)
             got = stereo_disparity(L, R, census_step=step, **kw)
             np.testing.assert_array_equal(got, ref)
+    # the default window is 3
+    np.testing.assert_array_equal(
+        stereo_disparity(L, R, num_disparities=16),
+        stereo_disparity(L, R, num_disparities=16, cost_window=3),
+    )
+
+
+def test_window_costs_twin_and_sums() -> None:
+    """The kernel's block sums equal the twin's and round(box sum / q) of the pixel costs."""
+    from scipy.ndimage import uniform_filter
+
+    from imageform._kernels import sgm
+    from imageform.geometry import _sgm_numpy as twin
+
+    rng = np.random.default_rng(3)
+    for h, w, r, div, lo, n in ((13, 17, 1, 3, -2, 9), (20, 30, 2, 7, 0, 16), (5, 4, 3, 13, 1, 5)):
+        a = rng.uniform(0, 255, (h, w)).astype(np.float32)
+        b = rng.uniform(0, 255, (h, w)).astype(np.float32)
+        z, st = np.float32(0), np.float32(4)
+        cl, cr = sgm.census(a, 2, z, st), sgm.census(b, 2, z, st)
+        got = sgm.window_costs(cl, cr, lo, n, 48, r, div, np.empty((h, w, n), np.uint8))
+        np.testing.assert_array_equal(got, twin.window_costs(cl, cr, lo, n, 48, r, div))
+        raw = twin.cost_volume(cl, cr, lo, n, 48).astype(np.float64)
+        m = 2 * r + 1
+        box = uniform_filter(raw, (m, m, 1), mode="nearest") * m * m
+        np.testing.assert_array_equal(got, np.floor(box / div + 0.5 + 1e-9))
+
+
+def test_cost_window_averages_sensor_noise_on_a_board() -> None:
+    """A fronto-parallel board (flat squares) seen by two cameras of independent noise: the
+    pixel costs alone scatter the disparity inside the squares, the 3 x 3 block sums do not
+    (benchmarks/check_stereo_webcam.py's real board pairs, webcam-1 11.84 % to 8.08 %)."""
+    rng = np.random.default_rng(5)
+    h, w, d, sq = 120, 200, 24, 20
+    y, x = np.mgrid[0:h, 0 : w + d]
+    board = np.where(((x // sq) + (y // sq)) % 2 == 0, 60.0, 190.0)
+    right = board[:, d:] + rng.normal(0, 2.0, (h, w))
+    left = board[:, :w] + rng.normal(0, 2.0, (h, w))  # x_right = x_left - d
+    u8 = [np.clip(np.round(im), 0, 255).astype(np.uint8) for im in (left, right)]
+    inner = (slice(10, h - 10), slice(48 + 10, w - 10))
+
+    def bad(cw: int) -> float:
+        disp = stereo_disparity(*u8, num_disparities=48, cost_window=cw)[inner]
+        return float(np.mean(~(np.abs(disp - d) <= 1)))  # invalid or more than 1 px off
+
+    before, after = bad(1), bad(3)
+    assert before > 0.05
+    assert after < before / 3
 
 
 def test_median_filter_fills_isolated_invalid_pixels(scene) -> None:  # type: ignore[no-untyped-def]
@@ -476,13 +531,12 @@ def test_census_threshold_matches_flat_squares_with_faint_shading() -> None:
         ok = np.isfinite(v)
         return float(ok.mean()), float(np.mean(np.abs(v[ok] - 9) > 1))
 
-    plain = scores(stereo_disparity(left, right, num_disparities=16, census_step=None))
+    one = {"num_disparities": 16, "cost_window": 1}  # each pixel's cost alone
+    plain = scores(stereo_disparity(left, right, census_step=None, **one))
     assert plain[1] > 0.25 and plain[0] < 0.9
     for thr in (2, 4.0):
         dens, bad = scores(
-            stereo_disparity(
-                left, right, num_disparities=16, census_threshold=thr, census_step=None
-            )
+            stereo_disparity(left, right, census_threshold=thr, census_step=None, **one)
         )
         assert dens > 0.99 and bad < 0.002, (thr, dens, bad)
     m = cv2.StereoSGBM_create(
@@ -511,10 +565,11 @@ def test_graded_census_is_the_default_and_matches_flat_squares() -> None:
     np.testing.assert_array_equal(
         d, stereo_disparity(left, right, num_disparities=16, census_step=4)
     )
-    # step 0: every cost and default penalty doubled, the plain census's map
+    # step 0: every cost and default penalty doubled, the plain census's map (with each
+    # pixel's cost alone: the block sums' divisors of 24 and 48 bits differ, 2 and 3)
     np.testing.assert_array_equal(
-        stereo_disparity(left, right, num_disparities=16, census_step=0.0),
-        stereo_disparity(left, right, num_disparities=16, census_step=None),
+        stereo_disparity(left, right, num_disparities=16, census_step=0.0, cost_window=1),
+        stereo_disparity(left, right, num_disparities=16, census_step=None, cost_window=1),
     )
     # a 7 x 7 window's 48 bits fill the code: the plain census
     np.testing.assert_array_equal(

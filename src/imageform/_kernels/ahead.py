@@ -171,6 +171,12 @@ PLANS: dict[str, Plan] = {
                 "cost_volume",
                 "(uint64[:, ::1], uint64[:, ::1], int64, int64, int64, uint8[:, :, ::1])",
             ),
+            Entry(
+                "sgm",
+                "window_costs",
+                "(uint64[:, ::1], uint64[:, ::1], int64, int64, int64, int64, int64,"
+                " uint8[:, :, ::1])",
+            ),
         ),
     ),
     # rendering and optics (3 s of NumPy) overlap the demosaicing and line-segment kernels

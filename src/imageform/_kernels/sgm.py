@@ -11,6 +11,10 @@ PAMI 30(2), 2008. The steps, each a kernel here with its NumPy twin in
 * :func:`cost_volume`: the Hamming distance of the left pixel's code and the right code at
   ``x - d`` for every disparity ``d`` (``uint8``); a disparity that leaves the right image
   costs the most a code can (its bit count).
+* :func:`window_costs`: those costs summed over a ``(2r+1)`` x ``(2r+1)`` block of left pixels
+  (the border replicated), divided by ``div`` and rounded (``((t + div // 2) M) >> 20`` with
+  ``M = ceil(2^20 / div)``: exact for the sums that occur), still ``uint8``: OpenCV's
+  ``blockSize`` sum of its pixel costs, which averages the sensor noise of flat regions out.
 * :func:`aggregate`: the sum over 8 paths (horizontal, vertical, both diagonals, both ways)
   of Hirschmüller's recursion (his eq. 13),
   ``L_r(p, d) = C(p, d) + min(L_r(p-r, d), L_r(p-r, d±1) + P1, min_k L_r(p-r, k) + P2)
@@ -50,6 +54,7 @@ __all__ = [
     "popcount64",
     "select",
     "speckles",
+    "window_costs",
 ]
 
 
@@ -121,6 +126,87 @@ def cost_volume(cl, cr, min_d, n_d, nbits, out=None):  # type: ignore[no-untyped
                     out[y, x, k] = nbits
                 else:
                     out[y, x, k] = popcount64(a ^ cr[y, xr])
+    return out
+
+
+@njit
+def _cost_row(cl, cr, y, min_d, n_d, nbits, out):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Hamming costs ``(W, n_d)`` of row ``y`` into ``out`` (:func:`cost_volume`'s row)."""
+    w = cl.shape[1]
+    a = cl[y]
+    b = cr[y]
+    for x in range(w):
+        o = out[x]
+        for k in range(n_d):
+            xr = x - (min_d + k)
+            if xr < 0 or xr >= w:
+                o[k] = nbits
+            else:
+                o[k] = popcount64(a[x] ^ b[xr])
+
+
+@njit
+def window_costs(cl, cr, min_d, n_d, nbits, r, div, out):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Block sums of the Hamming costs, ``uint8 (H, W, n_d)`` written into ``out``.
+
+    ``round(Σ C / div)`` over the ``(2r+1)²`` left pixels about each one (rows and columns
+    beyond the image replicated), ``C`` :func:`cost_volume`'s costs, the rounding
+    ``((Σ C + div // 2) M) >> 20`` with ``M = ceil(2^20 / div)`` (the quotient rounded half up,
+    exactly, for sums below 2^20 / div²). The rows of costs are computed once each, in a ring
+    of ``2r + 2`` rows; the block slides (a row in, a row out; a column in, a column out).
+    """
+    h, w = cl.shape
+    m = 2 * r + 1
+    ring = np.empty((m + 1, w, n_d), dtype=np.uint8)
+    have = np.full(m + 1, -1, dtype=np.int64)
+    cs = np.zeros((w + 2 * r, n_d), dtype=np.uint16)  # the column sums, border replicated
+    t = np.empty(n_d, dtype=np.uint16)  # (2r + 1)² nbits <= 49 * 48 fits
+    mul = np.uint32((2**20 + div - 1) // div)
+    half = np.uint16(div // 2)
+    sh = np.uint32(20)
+    for y in range(h):
+        for dy in range(-r - 1, r + 1):  # the rows of the block, and the one that leaves it
+            yy = min(max(y + dy, 0), h - 1)
+            if have[yy % (m + 1)] != yy:
+                _cost_row(cl, cr, yy, min_d, n_d, nbits, ring[yy % (m + 1)])
+                have[yy % (m + 1)] = yy
+        if y == 0:
+            for x in range(w):
+                acc = cs[x + r]
+                for k in range(n_d):
+                    acc[k] = 0
+                for dy in range(-r, r + 1):
+                    src = ring[min(max(dy, 0), h - 1) % (m + 1), x]
+                    for k in range(n_d):
+                        acc[k] += np.uint16(src[k])
+        else:  # slide the block down a row
+            add = ring[min(y + r, h - 1) % (m + 1)]
+            sub = ring[max(y - r - 1, 0) % (m + 1)]
+            for x in range(w):
+                acc = cs[x + r]
+                a = add[x]
+                b = sub[x]
+                for k in range(n_d):
+                    acc[k] = acc[k] + np.uint16(a[k]) - np.uint16(b[k])
+        for x in range(r):
+            cs[x] = cs[r]
+            cs[w + r + x] = cs[w + r - 1]
+        for k in range(n_d):
+            t[k] = half
+        for dx in range(m - 1):
+            c = cs[dx]
+            for k in range(n_d):
+                t[k] += c[k]
+        o_row = out[y]
+        for x in range(w):  # slide the block right a column
+            a = cs[x + m - 1]
+            o = o_row[x]
+            for k in range(n_d):
+                t[k] += a[k]
+                o[k] = np.uint8((np.uint32(t[k]) * mul) >> sh)
+            b = cs[x]
+            for k in range(n_d):
+                t[k] -= b[k]
     return out
 
 

@@ -13,7 +13,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["aggregate", "census", "cost_volume", "match", "median3", "select", "speckles"]
+__all__ = [
+    "aggregate",
+    "census",
+    "cost_volume",
+    "match",
+    "median3",
+    "select",
+    "speckles",
+    "window_costs",
+]
 
 #: bits set in each byte value
 _POP8 = np.array([bin(i).count("1") for i in range(256)], dtype=np.uint8)
@@ -67,6 +76,34 @@ def cost_volume(
         x0, x1 = max(0, d), min(w, w + d)  # x with 0 <= x - d < w
         if x0 < x1:
             out[:, x0:x1, k] = _popcount(cl[:, x0:x1] ^ cr[:, x0 - d : x1 - d])
+    return out
+
+
+def window_costs(
+    cl: NDArray[np.uint64],
+    cr: NDArray[np.uint64],
+    min_d: int,
+    n_d: int,
+    nbits: int,
+    r: int,
+    div: int,
+    out: NDArray[np.uint8] | None = None,
+) -> NDArray[np.uint8]:
+    """Block sums of the Hamming costs over ``(2r+1)²`` pixels, divided by ``div``, rounded."""
+    c = cost_volume(cl, cr, min_d, n_d, nbits).astype(np.uint32)
+    h, w = cl.shape
+    p = np.pad(c, ((r, r), (r, r), (0, 0)), mode="edge")
+    cs = np.zeros((h, w + 2 * r, n_d), dtype=np.uint32)
+    for dy in range(2 * r + 1):
+        cs += p[dy : dy + h]
+    t = np.full((h, w, n_d), div // 2, dtype=np.uint32)
+    for dx in range(2 * r + 1):
+        t += cs[:, dx : dx + w]
+    mul = np.uint32((2**20 + div - 1) // div)
+    q = ((t * mul) >> np.uint32(20)).astype(np.uint8)
+    if out is None:
+        return q
+    out[...] = q
     return out
 
 

@@ -45,6 +45,14 @@ BLOCK_SIZES = (3, 5, 7)
 #: the default ``census_step`` of :func:`stereo_disparity` (grey levels, 0-255): chosen on the
 #: tuning pairs of ``benchmarks/check_stereo_noise.py`` (its table: steps 2, 4 and 8)
 CENSUS_STEP = 4.0
+#: sides of the block over which :func:`stereo_disparity` sums the census costs
+COST_WINDOWS = (1, 3, 5, 7)
+#: the default ``cost_window`` of :func:`stereo_disparity`: chosen on the board pairs and the
+#: Middlebury pairs of ``benchmarks/check_stereo_webcam.py`` (its table: windows 1, 3, 5)
+COST_WINDOW = 3
+#: the largest block sum after its division (``uint8`` costs; 8 paths of ``cost + P2`` within
+#: 16 bits for every ``P2 <= MAX_P2``)
+MAX_COST = 191
 #: the sub-pixel fits of :func:`stereo_disparity`
 SUBPIXEL_FITS = ("equiangular", "parabola")
 
@@ -89,6 +97,7 @@ def stereo_disparity(
     median_filter: bool = False,
     census_threshold: float = 0.0,
     census_step: float | None = CENSUS_STEP,
+    cost_window: int = COST_WINDOW,
 ) -> NDArray[np.float32]:
     r"""Disparity of a rectified stereo pair by semi-global matching on census costs.
 
@@ -105,7 +114,15 @@ def stereo_disparity(
        OpenCV's Birchfield-Tomasi: it depends only on the order of intensities, so a gain
        or offset between the two cameras (an endoscope's two sensors, auto-exposure)
        changes nothing, and it was the most robust cost of Hirschmüller & Scharstein's
-       evaluation (PAMI 31(9), 2009) under radiometric differences.
+       evaluation (PAMI 31(9), 2009) under radiometric differences. With ``cost_window``
+       ``w > 1`` (default 3) the cost is the sum of those Hamming distances over the
+       ``w`` x ``w`` left pixels about ``(x, y)`` (each at its own ``x' - d``; the border
+       replicated), divided by the least whole ``q`` that keeps it within 191 and rounded,
+       ``C = round(Σ H / q)`` (``q = 3`` for the graded 5 x 5 census and ``w = 3``): OpenCV's
+       ``StereoSGBM`` sums its pixel costs over a ``blockSize`` block the same way. A census
+       compares every neighbour with one centre pixel, so that pixel's noise flips many bits
+       at once, and in a flat region (a board's squares) each pixel's best disparity
+       scatters; the sum averages that noise over the block.
     2. **Aggregation** along 8 paths (both ways horizontally, vertically and along both
        diagonals; OpenCV's ``MODE_HH``, not its 5-path default) by Hirschmüller's
        recursion (PAMI 30(2), 2008, eq. 13):
@@ -164,9 +181,11 @@ def stereo_disparity(
         Side of the census window (8, 24 or 48 bits a pixel).
     p1, p2 : int, optional
         Penalties of a disparity step of 1 and of a larger one along a path, in bits of
-        Hamming distance (``0 < p1 < p2 <= 8000``). Defaults ``p1`` a third of the code's
-        bits (``(block_size² - 1) / 3``, twice that for the graded census) and ``p2 = 4 p1``
-        (16 and 64 for the graded 5 x 5 census; 8 and 32 for the plain one: of 26 pairs tried
+        Hamming distance on the scale of step 1's costs (``0 < p1 < p2 <= 8000``). Defaults
+        ``p1`` a third of the code's bits (``(block_size² - 1) / 3``, twice that for the
+        graded census) times ``cost_window² / q`` (the scale of the block's sums) and
+        ``p2 = 4 p1`` (48 and 192 for the graded 5 x 5 census and ``cost_window=3``; with
+        ``cost_window=1``, 16 and 64, and 8 and 32 for the plain census: of 26 pairs tried
         on Middlebury's cones, one
         of the five at its best density with its share of errors over 3 px kept, taken for
         its figures on the other pairs of ``benchmarks/check_stereo_depth.py`` and its
@@ -229,6 +248,16 @@ def stereo_disparity(
         one bit per neighbour (the default before; step 0 gives its map too, every cost and
         default penalty doubled). A 7 x 7 window's 48 bits fill the 64-bit code:
         ``block_size=7`` always takes the plain census.
+    cost_window : {1, 3, 5, 7}
+        Side of the block of left pixels whose census costs are summed (step 1; OpenCV's
+        ``blockSize`` sum). Default 3: on ``benchmarks/check_stereo_webcam.py``'s board pairs
+        (truth the board's plane) the share of disparities more than 1 px off falls from
+        11.84 % to 8.08 % on webcam-1 (OpenCV ``MODE_HH`` 6.51 %), from 19.52 % to 11.66 %
+        on the XIMEA pairs (OpenCV 10.04 %), from 8.93 % to 2.39 % on the da Vinci endoscope's
+        (OpenCV 13.64 %), and on every Middlebury pair but cones (2.80 % to 2.82 %) too
+        (Adirondack 7.25 % to 5.80 %, tsukuba 5.07 % to 4.60 %). 5 lowers the boards' further
+        (webcam-1 6.98 %, XIMEA 8.33 %) but raises Middlebury teddy's and cones' (finer
+        shapes, fattened edges). 1: each pixel's cost alone, the default before 2026-11-30.
 
     Returns
     -------
@@ -243,8 +272,9 @@ def stereo_disparity(
     Notes
     -----
     The work is ``O(H W D)`` with ``D = num_disparities`` (about 3 ns a pixel and disparity
-    on one core with numba, some 0.8 times OpenCV's ``MODE_HH``); memory 3 bytes a pixel and
-    disparity. The numba kernels
+    on one core with numba, the block sums of ``cost_window`` some 0.3 ns more, sliding;
+    ``benchmarks/check_stereo_webcam.py`` times it against OpenCV's ``MODE_HH``); memory 3
+    bytes a pixel and disparity. The numba kernels
     (:mod:`imageform._kernels.sgm`) and their NumPy twins give the same numbers.
 
     Examples
@@ -279,7 +309,16 @@ def stereo_disparity(
         step = as_real(census_step, "census_step", minimum=0.0, maximum=255.0)
         step = step if bs < 7 else -1.0  # a 7 x 7 window's 48 bits fill the code alone
     nbits = (bs * bs - 1) * (2 if step >= 0 else 1)
-    P1 = max(1, nbits // 3) if p1 is None else as_int(p1, "p1", minimum=1, maximum=MAX_P2 - 1)
+    cw = as_int(cost_window, "cost_window")
+    if cw not in COST_WINDOWS:
+        raise InvalidInputError(
+            f"expected cost_window 1, 3, 5 or 7 (the block of summed costs), got {cw}"
+        )
+    div = _divisor(nbits, cw)
+    if p1 is None:  # a third of the code's bits, on the scale of the block's sums
+        P1 = max(1, (nbits // 3) * cw * cw // div)
+    else:
+        P1 = as_int(p1, "p1", minimum=1, maximum=MAX_P2 - 1)
     if not isinstance(adaptive_p2, bool | np.bool_):
         raise TypeError(f"expected adaptive_p2 as a bool, got {describe(adaptive_p2)}")
     if p2 is None:
@@ -311,7 +350,7 @@ def stereo_disparity(
         gl, gr = np.ascontiguousarray(gl.T), np.ascontiguousarray(gr.T)
     d = _match(
         kern, gl, gr, min_d, n_d, bs, P1, P2, bool(adaptive_p2), u, lr, sp, sr, equiangular,
-        bool(median_filter), thr, step,
+        bool(median_filter), thr, step, cw,
     )  # fmt: skip
     return np.ascontiguousarray(d.T) if vertical else d
 
@@ -334,6 +373,7 @@ def _match(
     median: bool = False,
     census_threshold: float = 0.0,
     census_step: float = -1.0,
+    cost_window: int = 1,
 ) -> NDArray[np.float32]:
     """Run the pipeline on checked grey images with the kernels (or twins) of module ``kern``."""
     r = bs // 2
@@ -344,7 +384,12 @@ def _match(
     # the volumes allocated by NumPy, not in the kernels: NumPy asks Linux for huge pages
     # (madvise), numba does not, and 4 kB pages cost a fifth of the matching's time in faults
     h, w = gl.shape
-    cost = kern.cost_volume(cl, cr, min_d, n_d, nbits, np.empty((h, w, n_d), np.uint8))
+    vol = np.empty((h, w, n_d), np.uint8)
+    if cost_window > 1:
+        div = _divisor(nbits, cost_window)
+        cost = kern.window_costs(cl, cr, min_d, n_d, nbits, cost_window // 2, div, vol)
+    else:
+        cost = kern.cost_volume(cl, cr, min_d, n_d, nbits, vol)
     total = np.empty((h, w, n_d), dtype=np.uint16)
     disp = kern.match(
         cost, gl, p1, p2, adaptive, min_d, float(uniqueness), float(lr), total, equiangular
@@ -355,6 +400,11 @@ def _match(
     if speckle_size > 0:
         kern.speckles(disp, speckle_size, float(speckle_range))
     return np.asarray(disp, dtype=np.float32)
+
+
+def _divisor(nbits: int, window: int) -> int:
+    """Return the block sums' divisor: the least keeping the largest sum within ``MAX_COST``."""
+    return max(1, -(-nbits * window * window // MAX_COST))
 
 
 def _q_matrix(rectification: StereoRectification | npt.ArrayLike) -> NDArray[np.float64]:

@@ -377,7 +377,8 @@ class DepthOptions(ImageIn):
     p1: int | None = option(
         None,
         help="Penalty of a disparity step of 1 px along a path (bits; default "
-        "(block_size^2 - 1) / 3).",
+        "(block_size^2 - 1) / 3, twice that for the graded census, times the summed block's "
+        "pixels divided to fit a byte).",
         minimum=1,
         maximum=7999,
     )
@@ -445,6 +446,15 @@ class DepthOptions(ImageIn):
         "texture. 0: the plain census (one bit a neighbour).",
         minimum=0.0,
         maximum=255.0,
+    )
+    cost_window: int = option(
+        3,
+        help="Side of the block over which the census costs are summed before the paths "
+        "(1, 3, 5 or 7; OpenCV's blockSize sum): averages the sensor noise of flat regions "
+        "(a board's squares) out; 1: each pixel's cost alone (before 2026-11-30), 5: flatter "
+        "views, less fine detail.",
+        minimum=1,
+        maximum=7,
     )
 
 
@@ -517,6 +527,8 @@ def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Pat
         raise InvalidInputError(f"--points writes a PLY file: give a .ply name, not {opts.points}")
     if opts.block_size not in (3, 5, 7):
         raise InvalidInputError(f"--block-size must be 3, 5 or 7, got {opts.block_size}")
+    if opts.cost_window not in (1, 3, 5, 7):
+        raise InvalidInputError(f"--cost-window must be 1, 3, 5 or 7, got {opts.cost_window}")
     if opts.p1 is not None and opts.p2 is not None and not opts.p2 > opts.p1:
         raise InvalidInputError(f"--p2 ({opts.p2}) must exceed --p1 ({opts.p1})")
     _check_distinct(str(left), str(right), [Path(left)], [Path(right)])
@@ -558,6 +570,7 @@ def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Pat
         median_filter=opts.median_filter,
         census_threshold=opts.census_threshold,
         census_step=opts.census_step,
+        cost_window=opts.cost_window,
         vertical=rect.vertical,
     )
     # left pixels whose source lies outside the left image hold no measurement
