@@ -296,6 +296,8 @@ EXCLUDED: dict[str, str] = {
     "detect_horizon": "image detector (Hough, LSD, region statistics), NumPy-only by design",
     "find_checkerboards": "image detector, NumPy-only by design",
     "detect_aruco_markers": "image detector, NumPy-only by design",
+    "solve_square_pose": "estimation (IPPE-square + LM on four corners), NumPy-only by design",
+    "marker_points": "a marker's four corners in its own frame: a constant, NumPy",
     "identify_aruco_dictionary": "image detector, NumPy-only by design",
     "brettel_planes": "the Brettel model's constant planes for a deficiency (NumPy)",
     "detect_charuco": "image detector, NumPy-only by design",

@@ -161,13 +161,13 @@ def tissue_mask(
 
     Examples
     --------
-    >>> tile = np.full((8, 8, 3), (0.55, 0.25, 0.55))      # hematoxylin-eosin purple
-    >>> tile[:, :2] = (0.94, 0.94, 0.94)                    # glass
-    >>> tile[5:, 4:] = (0.25, 0.7, 0.6)                     # green marker
-    >>> tile[:2, 6:] = (0.05, 0.05, 0.04)                   # black ink
+    >>> tile = np.full((40, 40, 3), (0.55, 0.25, 0.55))    # hematoxylin-eosin purple
+    >>> tile[:, :10] = (0.94, 0.94, 0.94)                   # glass
+    >>> tile[28:, 20:] = (0.25, 0.7, 0.6)                   # green marker
+    >>> tile[4:7, 12:] = (0.05, 0.05, 0.04)                 # a black ink stroke
     >>> m = tissue_mask(tile, i0=0.94, margin=0)
-    >>> int(m.sum()), bool(m[3, 3]), bool(m[6, 6]), bool(m[0, 7]), bool(m[0, 0])
-    (32, True, False, False, False)
+    >>> int(m.sum()), bool(m[15, 15]), bool(m[32, 30]), bool(m[5, 30]), bool(m[0, 0])
+    (816, True, False, False, False)
     """
     rgb = image_in(image, nonempty=True)
     if rgb.ndim < 3:

@@ -308,9 +308,9 @@ def _write_tiff(
             )
     description = meta.description if meta is not None else None
     if spec.recorded is not None:  # a space without a profile: named in level 0's description
-        import json
+        from imageform._jsonio import dumps
 
-        description, ome = json.dumps({COLOR_SPACE_KEY: spec.recorded}), False
+        description, ome = dumps({COLOR_SPACE_KEY: spec.recorded}, indent=None), False
         first_kw["metadata"] = None
     if spec.icc is not None:
         first_kw["iccprofile"] = spec.icc

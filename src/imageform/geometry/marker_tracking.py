@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 from imageform._typing import ArrayLike
 from imageform._validate import as_int, as_matrix, as_points, as_real, describe
 from imageform.errors import InvalidInputError
+from imageform.geometry.distortion import BrownConrady, DivisionModel, KannalaBrandt
 from imageform.geometry.tracking import BoardPose, _missing, _quat
 
 __all__ = ["MarkerTracker", "SquarePoses", "marker_points", "solve_square_pose"]
@@ -147,7 +148,7 @@ def solve_square_pose(
     image_points: ArrayLike,
     side: float,
     K: ArrayLike,
-    distortion: object = None,
+    distortion: BrownConrady | DivisionModel | KannalaBrandt | None = None,
     *,
     refine: bool = True,
     max_iter: int = 20,
@@ -329,7 +330,7 @@ class MarkerTracker:
         marker_id: int,
         side: float,
         K: object,
-        distortion: object = None,
+        distortion: BrownConrady | DivisionModel | KannalaBrandt | None = None,
         *,
         dictionary: object = "6x6_250",
         smooth: float = 1.0,
