@@ -1378,6 +1378,28 @@ def reconstruct_sequence(
         said.append(note)
         best = replace(again, notes=[*again.notes, *said])
         K_start, lens_start = K1, lens1
+    else:  # two restarts and the camera still moves: the data do not fix it
+        assert best.K is not None
+        start, found = float(K_start[0, 0]), float(best.K[0, 0])
+        k1_start = _radial_start(lens_start) if refine_distortion else 0.0
+        k1_found = _radial_start(best.distortion) if refine_distortion else 0.0
+        c = best.K[:2, 2]
+        rc2 = max((x - c[0]) ** 2 + (y - c[1]) ** 2 for x in (0, w - 1) for y in (0, h - 1))
+        if (
+            abs(found / start - 1) >= _FOCAL_RESTART
+            or abs(k1_found - k1_start) * rc2 / found**2 >= _RADIAL_RESTART
+        ):
+            best = replace(
+                best,
+                notes=[
+                    *best.notes,
+                    f"the camera did not settle: the last reconstruction moved f from "
+                    f"{start:.1f} to {found:.1f} px"
+                    + (f", k1 from {k1_start:.3f} to {k1_found:.3f}" if refine_distortion else "")
+                    + ": the frames do not fix it (a lens beyond one radial term, a fisheye?); "
+                    "calibrate the camera and give it",
+                ],
+            )
     return best
 
 
