@@ -1340,16 +1340,23 @@ def reconstruct_sequence(
     lens_start = distortion
     h, w = np.asarray(images[0]).shape[:2]
     said: list[str] = []
-    for _ in range(2):
-        assert best.K is not None
-        start, found = float(K_start[0, 0]), float(best.K[0, 0])
+
+    def moved(rec: Reconstruction) -> tuple[float, float, float, float, bool]:
+        """(f and k1 started from, f and k1 found, whether either moved past its threshold)."""
+        assert rec.K is not None
+        start, found = float(K_start[0, 0]), float(rec.K[0, 0])
         k1_start = _radial_start(lens_start) if refine_distortion else 0.0
-        k1_found = _radial_start(best.distortion) if refine_distortion else 0.0
+        k1_found = _radial_start(rec.distortion) if refine_distortion else 0.0
         # the corner's normalised radius, squared: where the radial term moves most
-        c = best.K[:2, 2]
+        c = rec.K[:2, 2]
         rc2 = max((x - c[0]) ** 2 + (y - c[1]) ** 2 for x in (0, w - 1) for y in (0, h - 1))
         lens_moved = abs(k1_found - k1_start) * rc2 / found**2
-        if abs(found / start - 1) < _FOCAL_RESTART and lens_moved < _RADIAL_RESTART:
+        far = abs(found / start - 1) >= _FOCAL_RESTART or lens_moved >= _RADIAL_RESTART
+        return start, found, k1_start, k1_found, far
+
+    for _ in range(2):
+        start, found, k1_start, k1_found, far = moved(best)
+        if not far:
             break
         K1 = K_start.copy()
         K1[:2, :2] *= found / start
@@ -1379,16 +1386,8 @@ def reconstruct_sequence(
         best = replace(again, notes=[*again.notes, *said])
         K_start, lens_start = K1, lens1
     else:  # two restarts and the camera still moves: the data do not fix it
-        assert best.K is not None
-        start, found = float(K_start[0, 0]), float(best.K[0, 0])
-        k1_start = _radial_start(lens_start) if refine_distortion else 0.0
-        k1_found = _radial_start(best.distortion) if refine_distortion else 0.0
-        c = best.K[:2, 2]
-        rc2 = max((x - c[0]) ** 2 + (y - c[1]) ** 2 for x in (0, w - 1) for y in (0, h - 1))
-        if (
-            abs(found / start - 1) >= _FOCAL_RESTART
-            or abs(k1_found - k1_start) * rc2 / found**2 >= _RADIAL_RESTART
-        ):
+        start, found, k1_start, k1_found, far = moved(best)
+        if far:
             best = replace(
                 best,
                 notes=[
