@@ -179,3 +179,78 @@ def marker_poses(n: int, distance: float = 300.0) -> list[tuple[np.ndarray, np.n
         pose = look_at(eye, np.array([8 * np.sin(a), 0.0, 0.0]), up=(0.0, 1.0, 0.0))
         out.append((np.asarray(pose.R, np.float64), np.asarray(pose.t, np.float64)))
     return out
+
+
+def map_frame(
+    K: np.ndarray,
+    pose: tuple[np.ndarray, np.ndarray],
+    size: tuple[int, int],
+    marker_map: object,
+    *,
+    drawn: dict[int, int] | None = None,
+    margin: float = 0.25,
+    backing: bool = True,
+    noise: float = 2.0,
+    blur: float = 0.0,
+    rng: np.random.Generator | None = None,
+) -> np.ndarray:
+    """One grey frame of a :class:`~imageform.geometry.MarkerMap`'s markers seen from ``pose``.
+
+    Each marker is imageform's image of it with a white margin of ``margin`` of its side,
+    placed by its corners in the map (``pose``: map to camera), drawn far to near and
+    only from its printed side (a cube's hidden faces are not drawn); a planar map is first
+    given a white backing over its extent (``backing``). ``drawn`` maps a marker's index in
+    the map to the id drawn there instead (a wrongly decoded marker). As
+    :func:`marker_frame`: 4x4 supersampling, Gaussian blur of ``blur`` px, noise.
+    """
+    import cv2
+
+    from imageform.geometry import aruco_marker_image
+
+    R, t = pose
+    m = marker_map
+    S = 4
+    K4 = np.diag([S, S, 1.0]) @ K
+    K4[0, 2], K4[1, 2] = S * K[0, 2] + (S - 1) / 2, S * K[1, 2] + (S - 1) / 2
+    shape = (size[1] * S, size[0] * S)
+    big = np.full(shape, 90.0)
+    corners = np.asarray(m.corners)  # type: ignore[attr-defined]
+    if backing and np.ptp(corners[..., 2]) == 0:
+        lo = corners[..., :2].reshape(-1, 2).min(0) - margin * float(m.sides.max())  # type: ignore[attr-defined]
+        hi = corners[..., :2].reshape(-1, 2).max(0) + margin * float(m.sides.max())  # type: ignore[attr-defined]
+        A = np.array([[hi[0] - lo[0], 0, lo[0]], [0, hi[1] - lo[1], lo[1]], [0, 0, 1]])
+        H = K4 @ np.column_stack([R[:, 0], R[:, 1], R[:, 2] * corners[0, 0, 2] + t]) @ A
+        unit = np.float32([[0, 0], [1, 0], [1, 1], [0, 1]])
+        quad = cv2.perspectiveTransform(unit[None], H)[0]
+        cv2.fillConvexPoly(big, np.round(quad * 16).astype(np.int32), 255.0, shift=4)
+    Rm, tm = m.marker_poses  # type: ignore[attr-defined]
+    depth = [(R @ tm[i] + t)[2] for i in range(len(m))]  # type: ignore[arg-type]
+    px = 120
+    q = round(margin * px)
+    for i in np.argsort(depth)[::-1]:
+        Rc, tc = R @ Rm[i], R @ tm[i] + t
+        if Rc[:, 2] @ tc >= 0:  # its printed side (z out of it) faces away from the camera
+            continue
+        side = float(m.sides[i])  # type: ignore[attr-defined]
+        marker_id = int((drawn or {}).get(int(i), int(m.ids[i])))  # type: ignore[attr-defined]
+        tex = np.full((px + 2 * q, px + 2 * q), 255, np.uint8)
+        tex[q : q + px, q : q + px] = aruco_marker_image(marker_id, m.dictionary, size_px=px)  # type: ignore[attr-defined]
+        s = side / px
+        A = np.array(
+            [[s, 0, (0.5 - q) * s - side / 2], [0, -s, side / 2 - (0.5 - q) * s], [0, 0, 1]]
+        )
+        H = K4 @ np.column_stack([Rc[:, 0], Rc[:, 1], tc]) @ A
+        warped = cv2.warpPerspective(
+            tex.astype(np.float32), H, shape[::-1], flags=cv2.INTER_LINEAR, borderValue=-1
+        )
+        cover = cv2.warpPerspective(
+            np.ones(tex.shape, np.float32), H, shape[::-1], flags=cv2.INTER_LINEAR
+        )
+        big = big * (1 - cover) + np.where(warped >= 0, warped, 0) * cover
+    f = cv2.resize(big, size, interpolation=cv2.INTER_AREA)
+    if blur:
+        f = cv2.GaussianBlur(f, (0, 0), blur)
+    if noise:
+        rng = rng or np.random.default_rng(0)
+        f = f + rng.normal(0, noise, f.shape)
+    return np.clip(np.round(f), 0, 255).astype(np.uint8)

@@ -73,6 +73,7 @@ from imageform.geometry.horizon_detection import HorizonResult, detect_horizon
 from imageform.geometry.intrinsics import Intrinsics, intrinsic_matrix, projected_size
 from imageform.geometry.line_segments import LineSegments, detect_line_segments
 from imageform.geometry.lsd import lsd_segments
+from imageform.geometry.marker_map import MarkerMap, MarkerMapTracker, grid_marker_map
 from imageform.geometry.marker_tracking import (
     MarkerTracker,
     SquarePoses,
@@ -180,6 +181,8 @@ __all__ = [
     "Intrinsics",
     "KannalaBrandt",
     "LineSegments",
+    "MarkerMap",
+    "MarkerMapTracker",
     "MarkerTracker",
     "PlumbLineResult",
     "PnPResult",
@@ -233,6 +236,7 @@ __all__ = [
     "from_homogeneous_masked",
     "fundamental_7point",
     "fundamental_8point",
+    "grid_marker_map",
     "highlight_mask",
     "horizon_line",
     "identify_aruco_dictionary",

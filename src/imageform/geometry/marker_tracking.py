@@ -32,7 +32,7 @@ from imageform._typing import ArrayLike
 from imageform._validate import as_int, as_matrix, as_points, as_real, describe
 from imageform.errors import InvalidInputError
 from imageform.geometry.distortion import BrownConrady, DivisionModel, KannalaBrandt
-from imageform.geometry.tracking import BoardPose, _missing, _quat
+from imageform.geometry.tracking import BoardPose, _check_camera, _missing, _quat
 
 __all__ = ["MarkerTracker", "SquarePoses", "marker_points", "solve_square_pose"]
 
@@ -276,6 +276,35 @@ def _angle(Ra: F64, Rb: F64) -> float:
     return float(np.arccos(np.clip(c, -1.0, 1.0)))
 
 
+def _refine_marker_corners(image: np.ndarray, uv: F64, marker_size: int) -> F64:
+    """Refine a marker's detected corners ``uv`` (4, 2) by the gradient criterion.
+
+    :func:`refine_corners` (Förstner's: the gradients in the window are orthogonal to
+    the directions from the corner), through a window half as wide as one of the
+    marker's cells (``marker_size`` bits and a border cell each side), which sees the
+    border's outer corner and none of its bits. A corner that does not converge, or moves
+    more than a third of a cell, keeps the detector's.
+    """
+    from imageform.geometry.checkerboard_subpix import refine_corners
+
+    sides = np.linalg.norm(uv - np.roll(uv, 1, axis=0), axis=1)
+    cell = float(np.mean(sides)) / (marker_size + 2)
+    hw = int(np.clip(round(cell / 2), 2, 10))
+    if cell < 4:
+        return uv
+    h, w = image.shape[:2]
+    inside = np.all((uv >= hw + 1) & (uv <= [w - hw - 2, h - hw - 2]), axis=1)
+    if not np.any(inside):
+        return uv
+    res = refine_corners(image, uv[inside], half_window=hw)
+    got = np.asarray(res.corners, np.float64)
+    ok = np.isin(np.asarray(res.status), (0, 1)) & np.all(np.isfinite(got), axis=1)
+    ok &= np.linalg.norm(got - uv[inside], axis=1) < cell / 3
+    out = uv.copy()
+    out[np.flatnonzero(inside)[ok]] = got[ok]
+    return out
+
+
 class MarkerTracker:
     r"""Follow one square ArUco marker through video frames (:class:`BoardTracker`'s interface).
 
@@ -338,17 +367,11 @@ class MarkerTracker:
         continuity: bool = True,
     ) -> None:
         from imageform.geometry.aruco import aruco_dictionary
-        from imageform.geometry.distortion import _check_model
 
         self.dictionary = aruco_dictionary(dictionary)  # type: ignore[arg-type]
         self.marker_id = as_int(marker_id, "marker_id", minimum=0, maximum=self.dictionary.size - 1)
         self.side = as_real(side, "side", positive=True, maximum=1e12)
-        k = np.asarray(as_matrix(K, "K", (3, 3), batch=False), dtype=np.float64)
-        if k[2, 2] == 0:
-            raise InvalidInputError(f"expected K with K[2, 2] != 0, got {describe(K)}")
-        self.K = k
-        if distortion is not None:
-            _check_model(distortion)
+        self.K = _check_camera(K, distortion)
         self.distortion = distortion
         self.smooth = as_real(smooth, "smooth", positive=True, maximum=1.0)
         self.predict = bool(predict)
@@ -377,31 +400,7 @@ class MarkerTracker:
         return self._refine(image[y0:y1, x0:x1], uv) + np.array([x0, y0], np.float64)
 
     def _refine(self, image: np.ndarray, uv: F64) -> F64:
-        """Refine the detector's corners ``uv`` (4, 2) by the gradient criterion.
-
-        :func:`refine_corners` (Förstner's: the gradients in the window are orthogonal to
-        the directions from the corner), through a window half as wide as one of the
-        marker's cells, which sees the border's outer corner and none of its bits. A corner
-        that does not converge, or moves more than a third of a cell, keeps the detector's.
-        """
-        from imageform.geometry.checkerboard_subpix import refine_corners
-
-        sides = np.linalg.norm(uv - np.roll(uv, 1, axis=0), axis=1)
-        cell = float(np.mean(sides)) / (self.dictionary.marker_size + 2)
-        hw = int(np.clip(round(cell / 2), 2, 10))
-        if cell < 4:
-            return uv
-        h, w = image.shape[:2]
-        inside = np.all((uv >= hw + 1) & (uv <= [w - hw - 2, h - hw - 2]), axis=1)
-        if not np.any(inside):
-            return uv
-        res = refine_corners(image, uv[inside], half_window=hw)
-        got = np.asarray(res.corners, np.float64)
-        ok = np.isin(np.asarray(res.status), (0, 1)) & np.all(np.isfinite(got), axis=1)
-        ok &= np.linalg.norm(got - uv[inside], axis=1) < cell / 3
-        out = uv.copy()
-        out[np.flatnonzero(inside)[ok]] = got[ok]
-        return out
+        return _refine_marker_corners(image, uv, self.dictionary.marker_size)
 
     def choose(self, poses: SquarePoses) -> int:
         """Index (0 or 1) of the solution kept: by fit, or by continuity when ambiguous."""

@@ -116,6 +116,22 @@ def _missing(searched: str = "none", uv: NDArray[np.float64] | None = None) -> B
     )  # fmt: skip
 
 
+def _check_camera(K: object, distortion: object) -> NDArray[np.float64]:
+    """Return ``K`` as a (3, 3) float array after checking it and ``distortion`` (trackers').
+
+    ``K[2, 2]`` must not be 0; a distortion model must be one of the models
+    (:class:`BrownConrady`, :class:`DivisionModel`, :class:`KannalaBrandt`) or None.
+    """
+    from imageform.geometry.distortion import _check_model
+
+    k = np.asarray(as_matrix(K, "K", (3, 3), batch=False), dtype=np.float64)
+    if k[2, 2] == 0:
+        raise InvalidInputError(f"expected K with K[2, 2] != 0, got {describe(K)}")
+    if distortion is not None:
+        _check_model(distortion)
+    return k
+
+
 def _quat(R: NDArray[np.float64]) -> NDArray[np.float64]:
     from imageform.geometry.rotations import matrix_to_quaternion
 
@@ -172,7 +188,6 @@ class BoardTracker:
         redetect: int = 10,
     ) -> None:
         from imageform.geometry.calibration import checkerboard_points
-        from imageform.geometry.distortion import _check_model
 
         if isinstance(board, CharucoBoard):
             self._charuco: CharucoBoard | None = board
@@ -189,12 +204,7 @@ class BoardTracker:
                 f"expected board as a CharucoBoard or (cols, rows) inner corners, got "
                 f"{describe(board)}"
             )
-        k = np.asarray(as_matrix(K, "K", (3, 3), batch=False), dtype=np.float64)
-        if k[2, 2] == 0:
-            raise InvalidInputError(f"expected K with K[2, 2] != 0, got {describe(K)}")
-        self.K = k
-        if distortion is not None:
-            _check_model(distortion)
+        self.K = _check_camera(K, distortion)
         self.distortion = distortion
         self.min_corners = as_int(min_corners, "min_corners", minimum=4, maximum=100000)
         a = as_real(smooth, "smooth", positive=True, maximum=1.0)

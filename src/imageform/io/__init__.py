@@ -60,6 +60,12 @@ from imageform.io.interlace import (
     field_camera_matrix,
     split_fields,
 )
+from imageform.io.marker_map_file import (
+    MARKER_MAP_FORMAT,
+    MARKER_MAP_VERSION,
+    read_marker_map,
+    write_marker_map,
+)
 from imageform.io.plan import PLAN_MESH_SUFFIXES, Plan, read_plan
 from imageform.io.png import read_png, write_png
 from imageform.io.raw import (
@@ -98,6 +104,8 @@ __all__ = [
     "DISTORTION_MODELS",
     "FIELD_ORDERS",
     "IMAGE_FORMATS",
+    "MARKER_MAP_FORMAT",
+    "MARKER_MAP_VERSION",
     "OPTICS_MODELS",
     "PLAN_MESH_SUFFIXES",
     "RAW_MAX_PIXELS",
@@ -145,6 +153,7 @@ __all__ = [
     "read_camera",
     "read_dicom",
     "read_image",
+    "read_marker_map",
     "read_plan",
     "read_png",
     "read_raw",
@@ -153,6 +162,7 @@ __all__ = [
     "write_camera",
     "write_dng",
     "write_image",
+    "write_marker_map",
     "write_png",
     "write_stereo_camera",
 ]

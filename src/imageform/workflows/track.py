@@ -1,10 +1,12 @@
 """``imageform track``: a board's pose in every frame of a video, and the plan drawn on it.
 
 The course's surgical-navigation loop: the endoscope is calibrated (its camera file), a
-board (ChArUco or checkerboard) or one ArUco marker is fixed to the patient's frame, and each
-frame's pose of the board places a plan drawn in board coordinates on the live image. The
-maths lives in :class:`imageform.geometry.BoardTracker` (detection, PnP, prediction,
-smoothing), :class:`imageform.geometry.MarkerTracker` (one marker: IPPE-square) and
+board (ChArUco or checkerboard), one ArUco marker or a map of several markers is fixed to
+the patient's frame, and each frame's pose of the board places a plan drawn in board
+coordinates on the live image. The maths lives in
+:class:`imageform.geometry.BoardTracker` (detection, PnP, prediction, smoothing),
+:class:`imageform.geometry.MarkerTracker` (one marker: IPPE-square),
+:class:`imageform.geometry.MarkerMapTracker` (a marker map: PnP over its markers) and
 :func:`imageform.report.overlays.draw_pose_overlay`; this module reads the video, writes
 ``poses.csv`` and the overlay video, and reports speed and jitter.
 """
@@ -29,31 +31,38 @@ from imageform.workflows._video import (
     field_order_option,
 )
 
-__all__ = ["POSE_COLUMNS", "WORKFLOWS", "TrackOptions", "parse_track_board"]
+__all__ = ["POSE_COLUMNS", "WORKFLOWS", "TrackOptions", "parse_track_board", "track_map_path"]
 
 #: Columns of ``poses.csv``.
 POSE_COLUMNS = ("frame", "time_s", "found", "corners", "rx", "ry", "rz", "tx", "ty", "tz", "rms_px")
 
 _BOARD = re.compile(r"^(charuco|checkerboard):(\d+)x(\d+)$|^(\d+)x(\d+)$")
 _MARKER = re.compile(r"^aruco:(\d+)$")
+_MAP = re.compile(r"^markers:(.+)$", re.IGNORECASE | re.DOTALL)
 
 
 def parse_track_board(text: str) -> tuple[str, tuple[int, ...]]:
-    """Parse ``--board``: ``charuco:COLSxROWS``, ``checkerboard:COLSxROWS`` or ``aruco:ID``.
+    """Parse ``--board``: ``charuco:``, ``checkerboard:COLSxROWS``, ``aruco:ID``, ``markers:FILE``.
 
     A checkerboard is given by its inner corners (OpenCV's pattern size, as ``imageform
     calibrate``); a bare ``COLSxROWS`` is a checkerboard; ``aruco:ID`` is one ArUco marker
-    (its id in ``--dictionary``, checked by the caller), returned as ``("aruco", (ID,))``.
+    (its id in ``--dictionary``, checked by the caller), returned as ``("aruco", (ID,))``;
+    ``markers:FILE`` is several markers on one object (a marker map file, read by
+    :func:`imageform.io.read_marker_map`; :func:`track_map_path` gives its path), returned
+    as ``("markers", ())``.
 
     Examples
     --------
     >>> parse_track_board("charuco:7x5"), parse_track_board("checkerboard:9x6")
     (('charuco', (7, 5)), ('checkerboard', (9, 6)))
-    >>> parse_track_board("aruco:23")
-    ('aruco', (23,))
+    >>> parse_track_board("aruco:23"), parse_track_board("markers:tool.toml")
+    (('aruco', (23,)), ('markers', ()))
     """
     if not isinstance(text, str):
         raise InvalidInputError(f"expected text (--board) as a str, got {type(text).__name__}")
+    if _MAP.match(text.strip()):
+        track_map_path(text)
+        return "markers", ()
     key = text.strip().lower()
     marker = _MARKER.match(key)
     if marker:
@@ -62,7 +71,8 @@ def parse_track_board(text: str) -> tuple[str, tuple[int, ...]]:
     if not m:
         raise InvalidInputError(
             "expected --board (text) as charuco:COLSxROWS (squares), checkerboard:COLSxROWS "
-            f"(inner corners) or aruco:ID (one marker), got {text[:40]!r}"
+            f"(inner corners), aruco:ID (one marker) or markers:FILE (a marker map), got "
+            f"{text[:40]!r}"
         )
     if m.group(1):
         kind, cols, rows = m.group(1), int(m.group(2)), int(m.group(3))
@@ -73,6 +83,22 @@ def parse_track_board(text: str) -> tuple[str, tuple[int, ...]]:
         what = "squares" if kind == "charuco" else "inner corners"
         raise InvalidInputError(f"expected {low} to 1000 {what} a side in --board, got {text!r}")
     return kind, (cols, rows)
+
+
+def track_map_path(text: str) -> Path:
+    """Return the marker map file of ``--board markers:FILE``.
+
+    Examples
+    --------
+    >>> track_map_path("markers:maps/tool.toml").as_posix()
+    'maps/tool.toml'
+    """
+    m = _MAP.match(text.strip()) if isinstance(text, str) else None
+    if not m or not m.group(1).strip():
+        raise InvalidInputError(
+            f"expected --board as markers:FILE (a marker map file), got {str(text)[:40]!r}"
+        )
+    return Path(m.group(1).strip())
 
 
 #: The video files ``--overlay`` writes (imageform.io.VideoWriter's containers).
@@ -90,8 +116,9 @@ class TrackOptions(Options):
     )
     board: str = option(
         help="charuco:COLSxROWS (squares, with --square and --marker), checkerboard:COLSxROWS "
-        "(inner corners, with --square) or aruco:ID (one ArUco marker of --dictionary, with "
-        "--marker).",
+        "(inner corners, with --square), aruco:ID (one ArUco marker of --dictionary, with "
+        "--marker) or markers:FILE (several markers on one object: a marker map file, TOML, "
+        "its lengths the poses' unit).",
         metavar="KIND:SPEC",
     )
     square: str | None = option(
@@ -153,6 +180,15 @@ class TrackOptions(Options):
 
         super().check()
         kind, spec = parse_track_board(self.board)
+        if kind == "markers":
+            for name, value in (("--marker", self.marker), ("--square", self.square)):
+                if value is not None:
+                    raise InvalidInputError(
+                        f"{name} is not for --board markers:FILE (the map file holds the "
+                        "markers' corners and unit)"
+                    )
+            self._check_rest()
+            return
         if kind == "aruco":
             from imageform.geometry.aruco import aruco_dictionary
 
@@ -224,12 +260,13 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
     import numpy as np
 
     from imageform._units import length_unit, parse_length
-    from imageform.geometry import BoardTracker, CharucoBoard, MarkerTracker
+    from imageform.geometry import BoardTracker, CharucoBoard, MarkerMapTracker, MarkerTracker
     from imageform.io import (
         VideoWriter,
         field_camera_matrix,
         open_video,
         read_camera,
+        read_marker_map,
         read_plan,
     )
     from imageform.report.overlays import draw_pose_overlay
@@ -240,7 +277,18 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
     kind, size = parse_track_board(opts.board)
     smooth = opts.smooth if opts.smooth is not None else 1.0
     tracker: Any
-    if kind == "aruco":
+    if kind == "markers":
+        marker_map = read_marker_map(track_map_path(opts.board), dictionary=opts.dictionary)
+        if opts.dictionary not in ("6x6_250", marker_map.dictionary):
+            raise InvalidInputError(
+                f"--dictionary {opts.dictionary} differs from the marker map's "
+                f"{marker_map.dictionary} (leave --dictionary out)"
+            )
+        unit = marker_map.unit
+        tracker = MarkerMapTracker(
+            marker_map, cam.K, cam.distortion, smooth=smooth, predict=not opts.no_predict
+        )
+    elif kind == "aruco":
         assert opts.marker is not None
         unit = length_unit(opts.marker, default_unit="mm")
         side = parse_length(opts.marker, "--marker", default_unit="mm", unit=unit)
@@ -429,7 +477,9 @@ WORKFLOWS = (
         "the corners with the camera file's model, solve PnP with refinement (X_cam = R X_board "
         "+ t, r a Rodrigues vector, t in the unit of --square); one ArUco marker (aruco:ID) by "
         "IPPE-square, its mirror-tilt ambiguity settled by continuity (t in the unit of "
-        "--marker); frames without the board are NaN rows. A capture device runs until "
+        "--marker); several markers on one object (markers:FILE) by PnP over all the corners "
+        "of the markers that agree (a misread id left out; t in the map's unit); frames "
+        "without the board are NaN rows. A capture device runs until "
         "Ctrl-C (or --max-frames) and prints its speed.",
     ),
 )
