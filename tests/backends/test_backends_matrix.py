@@ -298,6 +298,7 @@ EXCLUDED: dict[str, str] = {
     "detect_aruco_markers": "image detector, NumPy-only by design",
     "solve_square_pose": "estimation (IPPE-square + LM on four corners), NumPy-only by design",
     "marker_points": "a marker's four corners in its own frame: a constant, NumPy",
+    "grid_marker_map": "a marker map's corners (a layout of constants): NumPy",
     "identify_aruco_dictionary": "image detector, NumPy-only by design",
     "brettel_planes": "the Brettel model's constant planes for a deficiency (NumPy)",
     "detect_charuco": "image detector, NumPy-only by design",

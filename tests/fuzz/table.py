@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from imageform.geometry import Camera, CharucoBoard
+from imageform.geometry import Camera, CharucoBoard, MarkerMap
 from imageform.io import CameraColor, CameraFile, CameraOptics, icc_profile, parse_icc
 from tests.fuzz.runner import C, Skip, call, method
 from tests.fuzz.values import V
@@ -1726,6 +1726,38 @@ VALID.update(
         "imageform.geometry.MarkerTracker": call(7, 40.0, _K_TRACK, dictionary="4x4_50"),
         "imageform.geometry.SquarePoses": Skip("a result NamedTuple built by solve_square_pose"),
         "imageform.geometry.marker_points": call(40.0),
+        "imageform.geometry.MarkerMap": call(
+            [0, 1],
+            [
+                [[0.0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]],
+                [[20.0, 0, 0], [30, 0, 0], [30, 10, 0], [20, 10, 0]],
+            ],
+            "4x4_50",
+        ),
+        "imageform.geometry.grid_marker_map": call((3, 2), 30.0, 10.0, dictionary="4x4_50"),
+        "imageform.geometry.MarkerMapTracker": call(
+            MarkerMap(
+                np.array([0, 1]),
+                np.array(
+                    [
+                        [[0.0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]],
+                        [[20.0, 0, 0], [30, 0, 0], [30, 10, 0], [20, 10, 0]],
+                    ]
+                ),
+                "4x4_50",
+            ),
+            _K_TRACK,
+        ),
+        "imageform.io.read_marker_map": Skip(
+            "reads a marker map file (its doctest, tests/geometry/test_marker_map.py)"
+        ),
+        "imageform.io.write_marker_map": call(
+            V("tmpfile_png"),
+            MarkerMap(
+                np.array([3]), np.array([[[0.0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]]])
+            ),
+        ),
+        "imageform.workflows.track.track_map_path": call("markers:tool.toml"),
         "imageform.geometry.solve_square_pose": call(
             [[180.0, 230.0], [220.0, 230.0], [220.0, 270.0], [180.0, 270.0]], 40.0, _K_TRACK
         ),
@@ -1792,6 +1824,12 @@ VALID.update(
     {
         "imageform.geometry.BoardTracker.reset": method(VALID["imageform.geometry.BoardTracker"]),
         "imageform.geometry.MarkerTracker.reset": method(VALID["imageform.geometry.MarkerTracker"]),
+        "imageform.geometry.MarkerMapTracker.reset": method(
+            VALID["imageform.geometry.MarkerMapTracker"]
+        ),
+        "imageform.geometry.MarkerMapTracker.update": method(
+            VALID["imageform.geometry.MarkerMapTracker"], _BOARD_TRACK.image(20, margin_px=10)
+        ),
         "imageform.geometry.MarkerTracker.update": method(
             VALID["imageform.geometry.MarkerTracker"], _BOARD_TRACK.image(20, margin_px=10)
         ),

@@ -17,6 +17,7 @@ from tests import video_scenes
 pytest.importorskip("av")
 pytest.importorskip("cv2")
 
+ROOT = Path(__file__).resolve().parents[2]
 SIZE = (640, 360)
 K = np.array([[520.0, 0, 319.5], [0, 520.0, 179.5], [0, 0, 1]])
 
@@ -476,3 +477,82 @@ def test_track_one_aruco_marker_with_overlay(tmp_path: Path) -> None:
         assert angle < 1.5, angle
     with open_video(overlay) as v:
         assert len(list(v)) == 16
+
+
+def test_track_a_marker_map_then_simulate_its_path(tmp_path: Path) -> None:
+    """A grid map written by write_marker_map, tracked by --board markers:FILE; the poses
+    (metres: the map's unit) are the camera path that ``simulate --trajectory`` reads."""
+    from imageform.geometry import grid_marker_map, look_at, rvec_to_matrix
+    from imageform.io import write_image, write_marker_map
+
+    grid = grid_marker_map((3, 2), 0.03, 0.01, dictionary="4x4_50", unit="m")
+    marker_map = write_marker_map(tmp_path / "tool.toml", grid)
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    rng = np.random.default_rng(4)
+    truth = []
+    for i in range(3):
+        eye = np.array([0.05 + 0.06 * np.cos(i), 0.03 + 0.04 * np.sin(i), -0.36])
+        p = look_at(eye, np.array([0.05, 0.03, 0.0]), up=(0.0, -1.0, 0.0))
+        truth.append((np.asarray(p.R), np.asarray(p.t)))
+        grey = video_scenes.map_frame(K, truth[-1], SIZE, grid, blur=0.6, rng=rng)
+        write_image(frames / f"f{i}.png", grey)
+    camera = write_camera(tmp_path / "camera.toml", Camera(K, image_size=SIZE))
+    poses = tmp_path / "poses.csv"
+    args = ["track", str(frames / "*.png"), "--camera", str(camera)]
+    assert main([*args, "--board", f"markers:{marker_map}", "-o", str(poses), "--fps", "10"]) == 0
+    rows = _read(poses)
+    assert [r["found"] for r in rows] == ["1"] * 3 and {r["corners"] for r in rows} == {"24"}
+    for row, (R, t) in zip(rows, truth, strict=True):
+        tv = np.array([float(row[k]) for k in ("tx", "ty", "tz")])
+        Rv = np.asarray(rvec_to_matrix([float(row[k]) for k in ("rx", "ry", "rz")]))
+        assert np.linalg.norm(tv - t) < 0.003 * np.linalg.norm(t), (tv, t)
+        assert np.degrees(np.arccos(np.clip((np.trace(Rv @ R.T) - 1) / 2, -1, 1))) < 0.5
+    scene = ROOT / "examples" / "scenes" / "calibration_board.toml"
+    text = scene.read_text().split("\n[[views]]")[0]
+    for a, b in (("width = 640", "width = 160"), ("height = 480", "height = 120")):
+        text = text.replace(a, b)
+    (tmp_path / "scene.toml").write_text(text)
+    video = tmp_path / "again.mp4"
+    args = ["simulate", "--scene", str(tmp_path / "scene.toml"), "-o", str(tmp_path / "sim")]
+    assert main([*args, "--trajectory", str(poses), "--video", str(video)]) == 0
+    from imageform.io import open_video
+
+    with open_video(video) as v:
+        assert v.info.fps == pytest.approx(10) and len(list(v)) == 3
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--marker", "4cm"], "--marker is not for --board markers:FILE"),
+        (["--square", "4cm"], "--square is not for --board markers:FILE"),
+    ],
+)
+def test_marker_map_bad_options(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: list[str], message: str
+) -> None:
+    camera = write_camera(tmp_path / "camera.toml", Camera(K, image_size=SIZE))
+    args = ["track", str(tmp_path / "*.png"), "--camera", str(camera), "--board", "markers:m.toml"]
+    assert main([*args, *extra, "-o", str(tmp_path / "p.csv")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+def test_marker_map_bad_files(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from imageform.geometry import grid_marker_map
+    from imageform.io import write_marker_map
+
+    camera = write_camera(tmp_path / "camera.toml", Camera(K, image_size=SIZE))
+    frame = tmp_path / "f0.png"
+    from imageform.io import write_image
+
+    write_image(frame, np.full((SIZE[1], SIZE[0]), 128, np.uint8))
+    base = ["track", str(frame), "--camera", str(camera), "-o", str(tmp_path / "p.csv")]
+    assert main([*base, "--board", f"markers:{tmp_path / 'none.toml'}"]) == 1
+    assert "does not exist" in capsys.readouterr().err
+    m = write_marker_map(tmp_path / "m.toml", grid_marker_map((2, 1), 30.0, 5.0))
+    assert main([*base, "--board", f"markers:{m}", "--dictionary", "4x4_50"]) == 1
+    assert "differs from the marker map's 6x6_250" in capsys.readouterr().err
+    assert not (tmp_path / "p.csv").exists()
+    assert main([*base, "--board", "markers:"]) == 2

@@ -123,8 +123,11 @@ class MarkerMap:
                 f"{int(ids.min())} to {int(ids.max())}"
             )
         if np.unique(ids).size != ids.size:
-            raise InvalidInputError("expected every id once in a marker map, got an id twice")
-        c = np.asarray(self.corners, dtype=np.float64)
+            raise InvalidInputError("expected ids each once in a marker map, got an id twice")
+        try:
+            c = np.asarray(self.corners, dtype=np.float64)
+        except (TypeError, ValueError):
+            c = np.zeros(0)
         if c.shape != (ids.size, 4, 3) or not np.all(np.isfinite(c)):
             raise InvalidInputError(
                 f"expected corners as ({ids.size}, 4, 3) finite numbers (one marker per id), "

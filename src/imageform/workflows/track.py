@@ -96,7 +96,7 @@ def track_map_path(text: str) -> Path:
     m = _MAP.match(text.strip()) if isinstance(text, str) else None
     if not m or not m.group(1).strip():
         raise InvalidInputError(
-            f"expected --board as markers:FILE (a marker map file), got {str(text)[:40]!r}"
+            f"expected text (--board) as markers:FILE (a marker map file), got {str(text)[:40]!r}"
         )
     return Path(m.group(1).strip())
 

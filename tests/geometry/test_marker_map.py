@@ -1,0 +1,295 @@
+"""Several ArUco markers on one object: the marker map, its file, and its tracker.
+
+Frames are imageform's marker images placed by the map's corners and warped by known poses
+(tests/video_scenes.map_frame: 4x4 supersampled, blurred, with sensor noise); the truth is
+each frame's pose. OpenCV's GridBoard is the reference for the grid's layout.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from imageform.errors import InvalidInputError, UnknownOptionError
+from imageform.geometry import (
+    BrownConrady,
+    MarkerMap,
+    MarkerMapTracker,
+    MarkerTracker,
+    grid_marker_map,
+    look_at,
+    marker_points,
+)
+from imageform.io import read_marker_map, write_marker_map
+from tests import video_scenes
+
+cv2 = pytest.importorskip("cv2")
+
+K = np.array([[520.0, 0, 319.5], [0, 520.0, 179.5], [0, 0, 1]])
+SIZE = (640, 360)
+GRID = grid_marker_map((3, 2), 30.0, 10.0, dictionary="4x4_50")
+
+
+def _angle(Ra: np.ndarray, Rb: np.ndarray) -> float:
+    return float(np.degrees(np.arccos(np.clip((np.trace(Ra @ Rb.T) - 1) / 2, -1, 1))))
+
+
+def _path(n: int, distance: float = 380.0) -> list[tuple[np.ndarray, np.ndarray]]:
+    centre = np.array([50.0, 30.0, 0.0])
+    out = []
+    for i in range(n):
+        a = 2 * np.pi * i / n
+        eye = centre + np.array([90 * np.cos(a), 60 * np.sin(a), -distance])
+        p = look_at(eye, centre, up=(0.0, -1.0, 0.0))
+        out.append((np.asarray(p.R, np.float64), np.asarray(p.t, np.float64)))
+    return out
+
+
+def _frames(path: list, marker_map: MarkerMap = GRID, **kw: object) -> list[np.ndarray]:
+    rng = np.random.default_rng(3)
+    return [
+        video_scenes.map_frame(K, p, SIZE, marker_map, blur=0.6, rng=rng, **kw)  # type: ignore[arg-type]
+        for p in path
+    ]
+
+
+def test_grid_is_opencvs_gridboard() -> None:
+    d = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50)
+    board = cv2.aruco.GridBoard((3, 2), 30.0, 10.0, d)
+    np.testing.assert_allclose(np.array(board.getObjPoints()), GRID.corners)
+    np.testing.assert_array_equal(board.getIds().ravel(), GRID.ids)
+
+
+def test_marker_poses_carry_marker_points_onto_the_corners() -> None:
+    R, t = GRID.marker_poses
+    for i in range(len(GRID)):
+        got = marker_points(30.0) @ R[i].T + t[i]
+        np.testing.assert_allclose(got, GRID.corners[i], atol=1e-12)
+        assert np.linalg.det(R[i]) == pytest.approx(1.0)
+        assert R[i][2] @ [0, 0, -1] == pytest.approx(1.0)  # the print faces -z of the grid
+
+
+@pytest.mark.parametrize(
+    ("ids", "corners", "dictionary", "message"),
+    [
+        ([1, 1], [marker_points(1.0)] * 2, "4x4_50", "ids each once"),
+        ([50], [marker_points(1.0)], "4x4_50", "ids 0 to 49"),
+        ([1], [marker_points(1.0) * [1, 1.1, 1]], "4x4_50", "as a square"),
+        ([1, 2], [marker_points(1.0)], "4x4_50", "(2, 4, 3)"),
+        ([1], [marker_points(1.0)], "5x9", "dictionary"),
+        ([[1]], [marker_points(1.0)], "4x4_50", "1-D array"),
+    ],
+)
+def test_bad_maps(ids: object, corners: object, dictionary: str, message: str) -> None:
+    with pytest.raises(InvalidInputError, match=re.escape(message)):
+        MarkerMap(np.asarray(ids), np.asarray(corners), dictionary)
+
+
+def test_track_a_grid_against_the_truth() -> None:
+    path = _path(8)
+    tracker = MarkerMapTracker(GRID, K)
+    for (R, t), f in zip(path, _frames(path), strict=True):
+        pose = tracker.update(f)
+        assert pose.found and pose.corners == 24
+        assert np.linalg.norm(pose.tvec - t) / np.linalg.norm(t) < 0.003
+        assert _angle(pose.R, R) < 0.5
+        c = pose.object_points @ R.T + t
+        uv = c[:, :2] / c[:, 2:] * 520 + K[:2, 2]
+        assert np.median(np.linalg.norm(pose.image_points - uv, axis=1)) < 0.4
+
+
+def test_a_misread_marker_and_an_occluded_one_are_left_out() -> None:
+    """Marker 5's place printed with id 0 (id 0 twice); marker 1 covered.
+
+    imageform's detector keeps one sighting of an id (the clearer): here the misprint, whose
+    corners disagree with markers 2, 3 and 4; the pose is theirs.
+    """
+    path = _path(6)
+    tracker = MarkerMapTracker(GRID, K)
+    for (R, t), f in zip(path, _frames(path, drawn={5: 0}), strict=True):
+        f[132:188, 300:353] = 150  # a finger over marker 1 (the top row's middle)
+        pose = tracker.update(f)
+        assert pose.found
+        used = {tuple(p) for p in pose.object_points[::4]}
+        assert used - {tuple(GRID.corners[0, 0])} == {tuple(GRID.corners[i, 0]) for i in (2, 3, 4)}
+        c = pose.object_points @ R.T + t  # a marker 0 used is the true one, not the misprint
+        uv = c[:, :2] / c[:, 2:] * 520 + K[:2, 2]
+        assert np.abs(pose.image_points - uv).max() < 1.5
+        assert np.linalg.norm(pose.tvec - t) / np.linalg.norm(t) < 0.005
+        assert _angle(pose.R, R) < 2.0  # three markers of 40 px in an L
+
+
+def test_opencv_board_is_pulled_by_the_misread_marker() -> None:
+    """The reference: OpenCV's matchImagePoints takes both instances of id 0."""
+    (R, _t), f = _path(1)[0], _frames(_path(1), drawn={5: 0})[0]
+    d = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50)
+    det = cv2.aruco.ArucoDetector(d, cv2.aruco.DetectorParameters())
+    board = cv2.aruco.Board(list(GRID.corners.astype(np.float32)), d, GRID.ids.astype(np.int32))
+    corners, ids, _ = det.detectMarkers(f)
+    X, uv = board.matchImagePoints(corners, ids)
+    _, rv, _tv = cv2.solvePnP(X, uv, K, None)
+    ours = MarkerMapTracker(GRID, K).update(f)
+    assert _angle(ours.R, R) < 1.0
+    assert _angle(cv2.Rodrigues(rv)[0], R) > 3 * _angle(ours.R, R)
+
+
+def test_one_marker_map_is_marker_tracker() -> None:
+    """One marker in a map: IPPE's two solutions and the continuity rule, as MarkerTracker."""
+    from imageform.geometry import rvec_to_matrix
+
+    side = 40.0
+    one = MarkerMap(np.array([7]), marker_points(side)[None], "4x4_50")
+    rng = np.random.default_rng(3)
+    frames = []
+    for i in range(24):
+        tilt = 40 * np.exp(-i / 4) + 8 + 2 * np.sin(i / 3)
+        R = np.diag([1.0, -1, -1]) @ np.asarray(
+            rvec_to_matrix(np.array([0.6, 0.8, 0.0]) * np.radians(tilt))
+        )
+        t = np.array([20 * np.sin(i / 5), 10.0, 700.0])
+        frames.append(video_scenes.marker_frame(K, (R, t), SIZE, noise=4.0, blur=0.8, rng=rng))
+    a, b = MarkerMapTracker(one, K), MarkerTracker(7, side, K, dictionary="4x4_50")
+    for f in frames:
+        pa, pb = a.update(f), b.update(f)
+        assert pa.found and pb.found
+        np.testing.assert_allclose(pa.image_points, pb.image_points, atol=0.01)
+        assert _angle(pa.R, pb.R) < 0.01
+        np.testing.assert_allclose(pa.tvec, pb.tvec, rtol=1e-4)
+
+
+def test_a_cube_of_markers() -> None:
+    from benchmarks.check_track_markers import _cube_path, cube_map
+
+    cube = cube_map()
+    path = _cube_path(6)
+    tracker = MarkerMapTracker(cube, K)
+    for (R, t), f in zip(path, _frames(path, cube), strict=True):
+        pose = tracker.update(f)
+        assert pose.found and pose.corners >= 8
+        assert np.linalg.norm(pose.tvec - t) / np.linalg.norm(t) < 0.01
+        assert _angle(pose.R, R) < 1.0
+
+
+def test_lost_frames_smoothing_and_reset() -> None:
+    path = _path(4)
+    frames = _frames(path)
+    blank = np.full((SIZE[1], SIZE[0]), 90, np.uint8)
+    tracker = MarkerMapTracker(GRID, K, smooth=0.5)
+    first = tracker.update(frames[0])
+    second = tracker.update(frames[1])
+    assert first.found and second.found and second.searched == "box"
+    raw = MarkerMapTracker(GRID, K).update(frames[1])
+    np.testing.assert_allclose(second.tvec, 0.5 * (first.tvec + raw.tvec), atol=1e-3)
+    lost = tracker.update(blank)
+    assert not lost.found and np.all(np.isnan(lost.tvec)) and lost.searched == "none"
+    assert tracker.update(frames[2]).searched == "frame"
+    tracker.reset()
+    assert tracker.update(frames[3]).searched == "frame"
+
+
+def test_distortion_is_undone() -> None:
+    d = BrownConrady(k1=-0.2, k2=0.05)
+    (R, t) = _path(1)[0]
+    f = _frames([(R, t)])[0]
+    # the frame through a distorting lens: each pixel fetched from where the lens puts it
+    h, w = f.shape
+    u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    xy = np.stack([(u - K[0, 2]) / K[0, 0], (v - K[1, 2]) / K[1, 1]], -1)
+    und, _ = d.undistort(xy.reshape(-1, 2))
+    und = np.asarray(und).reshape(h, w, 2)
+    mx = (und[..., 0] * K[0, 0] + K[0, 2]).astype(np.float32)
+    my = (und[..., 1] * K[1, 1] + K[1, 2]).astype(np.float32)
+    seen = cv2.remap(f, mx, my, cv2.INTER_LINEAR, borderValue=90)
+    pose = MarkerMapTracker(GRID, K, d).update(seen)
+    assert pose.found
+    assert np.linalg.norm(pose.tvec - t) / np.linalg.norm(t) < 0.005
+    assert _angle(pose.R, R) < 0.5
+
+
+@pytest.mark.parametrize(
+    ("kw", "message"),
+    [
+        ({"smooth": 0}, "smooth"),
+        ({"min_markers": 7}, "min_markers"),
+        ({"redetect": 0}, "redetect"),
+    ],
+)
+def test_bad_tracker_arguments(kw: dict, message: str) -> None:
+    with pytest.raises(InvalidInputError, match=message):
+        MarkerMapTracker(GRID, K, **kw)
+
+
+def test_trackers_share_the_camera_check() -> None:
+    from imageform.geometry import BoardTracker
+
+    bad = np.zeros((3, 3))
+    for make in (
+        lambda: MarkerMapTracker(GRID, bad),
+        lambda: MarkerTracker(1, 1.0, bad),
+        lambda: BoardTracker((4, 3), bad),
+    ):
+        with pytest.raises(InvalidInputError, match=r"K\[2, 2\] != 0"):
+            make()
+    with pytest.raises(InvalidInputError):
+        MarkerMapTracker(GRID, K, "lens")  # type: ignore[arg-type]
+    with pytest.raises(InvalidInputError, match="MarkerMap"):
+        MarkerMapTracker("map", K)  # type: ignore[arg-type]
+
+
+# -- the file ----------------------------------------------------------------------------
+
+
+def test_file_round_trip(tmp_path: Path) -> None:
+    m = MarkerMap(np.array([4, 9]), np.stack([marker_points(20.0), marker_points(20.0) + 30]))
+    p = write_marker_map(tmp_path / "tool.toml", m)
+    got = read_marker_map(p)
+    assert got.dictionary == "6x6_250" and got.unit == "mm"
+    np.testing.assert_array_equal(got.ids, m.ids)
+    np.testing.assert_allclose(got.corners, m.corners)
+
+
+def test_file_dictionary_default(tmp_path: Path) -> None:
+    p = tmp_path / "m.toml"
+    rows = ", ".join(str(list(r)) for r in marker_points(10.0).tolist())
+    p.write_text(f"[[markers]]\nid = 3\ncorners = [{rows}]\n")
+    assert read_marker_map(p, dictionary="4x4_50").dictionary == "4x4_50"
+    p.write_text(f'dictionary = "5x5_100"\n[[markers]]\nid = 3\ncorners = [{rows}]\n')
+    assert read_marker_map(p, dictionary="4x4_50").dictionary == "5x5_100"
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("markers = [", "not valid TOML"),
+        ("unit = 'mm'\n", "markers: expected one"),
+        ("[[markers]]\nid = 1\n", "both id and corners"),
+        ("[[markers]]\nid = -1\ncorners = []\n", "integer >= 0"),
+        ("[[markers]]\nid = 1\ncorners = [[0, 0, 0]]\n", "4 corners"),
+        ("[[markers]]\nid = 1\ncorners = [[0,0,0],[1,0,0],[1,1,0],[0,2,0]]\n", "a square"),
+        ("version = 9\n[[markers]]\nid = 1\ncorners = []\n", "newer"),
+        ("format = 'x'\n", "imageform-marker-map"),
+    ],
+)
+def test_bad_files(tmp_path: Path, text: str, message: str) -> None:
+    p = tmp_path / "m.toml"
+    p.write_text(text)
+    with pytest.raises(InvalidInputError, match=message) as err:
+        read_marker_map(p)
+    assert str(p) in str(err.value) and "\n" not in str(err.value)
+
+
+def test_file_unknown_key_and_missing(tmp_path: Path) -> None:
+    p = tmp_path / "m.toml"
+    p.write_text("colour = 1\n")
+    with pytest.raises(UnknownOptionError, match="colour"):
+        read_marker_map(p)
+    with pytest.raises(InvalidInputError, match="does not exist"):
+        read_marker_map(tmp_path / "none.toml")
+    (tmp_path / "bin.toml").write_bytes(b"\xff\xfe\x00")
+    with pytest.raises(InvalidInputError, match="not UTF-8"):
+        read_marker_map(tmp_path / "bin.toml")
+    with pytest.raises(InvalidInputError, match="MarkerMap"):
+        write_marker_map(tmp_path / "x.toml", "map")  # type: ignore[arg-type]
