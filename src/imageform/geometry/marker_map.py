@@ -35,6 +35,8 @@ from imageform.geometry.marker_tracking import (
     _AMBIGUITY_PX,
     _AMBIGUITY_RATIO,
     _angle,
+    _cross2,
+    _ippe_pair,
     _refine_marker_corners,
     marker_points,
 )
@@ -342,21 +344,16 @@ class MarkerMapTracker:
 
         x0, y0, x1, y1 = box if box is not None else (0, 0, image.shape[1], image.shape[0])
         crop = image[y0:y1, x0:x1]
-        found = detect_aruco_markers(crop, self.dictionary)
+        # by name: the detector caches a predefined dictionary's rotated codes by name
+        found = detect_aruco_markers(crop, self.map.dictionary)
         # every instance of the map's ids: an id seen twice (a second print, a misread
         # marker) is settled by which instance agrees with the others (_solve)
         keep = [j for j in range(len(found)) if int(found.ids[j]) in self._index]
         if not keep:
             return np.zeros(0, np.int64), np.zeros((0, 4, 2))
         which = np.array([self._index[int(found.ids[j])] for j in keep], np.int64)
-        uv = np.stack(
-            [
-                _refine_marker_corners(
-                    crop, np.asarray(found.corners[j], np.float64), self.dictionary.marker_size
-                )
-                for j in keep
-            ]
-        )
+        raw = np.asarray(found.corners, np.float64)[keep]
+        uv = _refine_marker_corners(crop, raw, self.dictionary.marker_size)
         return which, uv + np.array([x0, y0], np.float64)
 
     # -- pose -----------------------------------------------------------------------------
@@ -382,7 +379,6 @@ class MarkerMapTracker:
         self, which: NDArray[np.int64], uv: F64
     ) -> tuple[F64, F64, float, NDArray[np.bool_]] | None:
         """Solve the object's pose from the markers ``which`` seen at ``uv`` (m, 4, 2)."""
-        from imageform.geometry.marker_tracking import solve_square_pose
         from imageform.geometry.pnp import _normalised, refine_pose
 
         k = self.K / self.K[2, 2]
@@ -399,13 +395,14 @@ class MarkerMapTracker:
         # hypotheses: each of the largest markers' two IPPE poses, carried to the object
         seeds = np.argsort(-side_px, kind="stable")[:_MAX_SEEDS]
         Rh, th, seed_of = [], [], []
+        quads = xy.reshape(m, 4, 2)
         for j in seeds:
-            try:
-                sq = solve_square_pose(ideal[j], float(self.map.sides[which[j]]), k, refine=False)
-            except InvalidInputError:
-                continue
+            q = quads[j]
+            if not np.all(np.abs(_cross2(q[[1, 2, 3, 0]] - q, q[[3, 0, 1, 2]] - q)) > 1e-12):
+                continue  # three corners in a line: no quadrilateral
+            pair = _ippe_pair(q, marker_points(float(self.map.sides[which[j]])))
             Ri, ti = self._Rm[which[j]], self._tm[which[j]]
-            for Rs, ts in zip(sq.R, sq.tvec, strict=True):
+            for Rs, ts in zip(*pair, strict=True):
                 R = Rs @ Ri.T
                 Rh.append(R)
                 th.append(ts - R @ ti)

@@ -144,6 +144,18 @@ def _translation(R: F64, X: F64, xy: F64) -> F64:
     return np.linalg.lstsq(A, b.reshape(-1), rcond=None)[0]
 
 
+def _ippe_pair(xy: F64, X: F64) -> tuple[F64, F64]:
+    """IPPE-square's two closed-form poses (R (2, 3, 3), t (2, 3)) from normalised corners.
+
+    ``xy`` (4, 2): the undistorted normalised corners; ``X`` (4, 3): :func:`marker_points`.
+    """
+    H = _homography4(X[:, :2], xy)
+    v = H[:2, 2].copy()
+    J = H[:2, :2] - np.outer(v, H[2, :2])
+    Rs = np.stack(_ippe_rotations(v, J))
+    return Rs, np.stack([_translation(R, X, xy) for R in Rs])
+
+
 def solve_square_pose(
     image_points: ArrayLike,
     side: float,
@@ -239,11 +251,7 @@ def solve_square_pose(
         raise InvalidInputError(
             "expected image_points as a quadrilateral (no three corners in a line)"
         )
-    H = _homography4(X[:, :2], xy)
-    v = H[:2, 2].copy()
-    J = H[:2, :2] - np.outer(v, H[2, :2])
-    Rs = np.stack(_ippe_rotations(v, J))
-    ts = np.stack([_translation(R, X, xy) for R in Rs])
+    Rs, ts = _ippe_pair(xy, X)
     ideal = np.stack(
         [k[0, 0] * xy[:, 0] + k[0, 1] * xy[:, 1] + k[0, 2], k[1, 1] * xy[:, 1] + k[1, 2]], -1
     )
@@ -277,32 +285,39 @@ def _angle(Ra: F64, Rb: F64) -> float:
 
 
 def _refine_marker_corners(image: np.ndarray, uv: F64, marker_size: int) -> F64:
-    """Refine a marker's detected corners ``uv`` (4, 2) by the gradient criterion.
+    """Refine markers' detected corners ``uv`` ((4, 2), or (m, 4, 2)) by the gradient criterion.
 
     :func:`refine_corners` (Förstner's: the gradients in the window are orthogonal to
     the directions from the corner), through a window half as wide as one of the
     marker's cells (``marker_size`` bits and a border cell each side), which sees the
     border's outer corner and none of its bits. A corner that does not converge, or moves
-    more than a third of a cell, keeps the detector's.
+    more than a third of a cell, keeps the detector's. Markers whose windows are the same
+    size are refined in one call (the image converted once).
     """
     from imageform.geometry.checkerboard_subpix import refine_corners
 
-    sides = np.linalg.norm(uv - np.roll(uv, 1, axis=0), axis=1)
-    cell = float(np.mean(sides)) / (marker_size + 2)
-    hw = int(np.clip(round(cell / 2), 2, 10))
-    if cell < 4:
-        return uv
+    one = uv.ndim == 2
+    quads = uv[None] if one else uv
+    out = quads.copy()
+    sides = np.linalg.norm(quads - np.roll(quads, 1, axis=1), axis=2)
+    cell = sides.mean(axis=1) / (marker_size + 2)
+    hw = np.clip(np.round(cell / 2), 2, 10).astype(int)
     h, w = image.shape[:2]
-    inside = np.all((uv >= hw + 1) & (uv <= [w - hw - 2, h - hw - 2]), axis=1)
-    if not np.any(inside):
-        return uv
-    res = refine_corners(image, uv[inside], half_window=hw)
-    got = np.asarray(res.corners, np.float64)
-    ok = np.isin(np.asarray(res.status), (0, 1)) & np.all(np.isfinite(got), axis=1)
-    ok &= np.linalg.norm(got - uv[inside], axis=1) < cell / 3
-    out = uv.copy()
-    out[np.flatnonzero(inside)[ok]] = got[ok]
-    return out
+    for size in np.unique(hw[cell >= 4]):
+        group = np.flatnonzero((hw == size) & (cell >= 4))
+        pts = quads[group].reshape(-1, 2)
+        inside = np.all((pts >= size + 1) & (pts <= [w - size - 2, h - size - 2]), axis=1)
+        if not np.any(inside):
+            continue
+        res = refine_corners(image, pts[inside], half_window=int(size))
+        got = np.asarray(res.corners, np.float64)
+        limit = np.repeat(cell[group], 4)[inside] / 3
+        ok = np.isin(np.asarray(res.status), (0, 1)) & np.all(np.isfinite(got), axis=1)
+        ok &= np.linalg.norm(got - pts[inside], axis=1) < limit
+        new = pts.copy()
+        new[np.flatnonzero(inside)[ok]] = got[ok]
+        out[group] = new.reshape(-1, 4, 2)
+    return out[0] if one else out
 
 
 class MarkerTracker:
@@ -369,6 +384,8 @@ class MarkerTracker:
         from imageform.geometry.aruco import aruco_dictionary
 
         self.dictionary = aruco_dictionary(dictionary)  # type: ignore[arg-type]
+        # a name: the detector caches a predefined dictionary's rotated codes by name
+        self._detect_with: object = dictionary if isinstance(dictionary, str) else self.dictionary
         self.marker_id = as_int(marker_id, "marker_id", minimum=0, maximum=self.dictionary.size - 1)
         self.side = as_real(side, "side", positive=True, maximum=1e12)
         self.K = _check_camera(K, distortion)
@@ -388,7 +405,7 @@ class MarkerTracker:
         from imageform.geometry.aruco import detect_aruco_markers
 
         x0, y0, x1, y1 = box if box is not None else (0, 0, image.shape[1], image.shape[0])
-        found = detect_aruco_markers(image[y0:y1, x0:x1], self.dictionary)
+        found = detect_aruco_markers(image[y0:y1, x0:x1], self._detect_with)  # type: ignore[arg-type]
         hit = np.flatnonzero(found.ids == self.marker_id)
         if hit.size == 0:
             return None
