@@ -86,9 +86,7 @@ def _check_data_suffix(wf: Workflow, out: Path) -> None:
             f"{wf.name} writes a {kinds} file: give -o a {kinds} name, not {out.name!r}"
         )
     kinds = ", ".join(wf.suffixes[:-1]) + f" or {wf.suffixes[-1]}"
-    raise InvalidInputError(
-        f"{wf.name} writes an image: give -o a {kinds} name, not {out.name!r}"
-    )
+    raise InvalidInputError(f"{wf.name} writes an image: give -o a {kinds} name, not {out.name!r}")
 
 
 #: Names of files, never of the folder a folder output (simulate, reconstruct...) writes.
