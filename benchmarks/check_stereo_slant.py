@@ -16,7 +16,7 @@ rim's valid pixels are such inliers and half of the rim is valid (a rim across t
 fails). The segment-based plane fits of the literature (e.g. A. Klaus, M. Sormann, K.
 Karner, "Segment-based stereo matching using belief propagation and a self-adapting
 dissimilarity measure", ICPR 2006; H. Hirschmüller's own "Stereo processing by semiglobal
-matching and mutual information", PAMI 30(2), 2008, section 4.3, which fits planes to
+matching and mutual information", PAMI 30(2), 2008, which for untextured areas fits planes to
 segments of the intensity image), with the flat regions as segments and their rims as the
 disparities trusted. Candidates measured on the tuning data (seen before: the board sets of
 ``check_stereo_fresh.py``, Middlebury 2003 / 2014 of ``check_stereo_depth.py``, the 2005 /
