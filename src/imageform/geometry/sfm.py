@@ -1298,7 +1298,12 @@ def reconstruct_sequence(
         is undistorted again with the lens found (the pairs, PnP and the triangulation use
         it); when its displacement at the image's corner moves by more than 1 % of the
         corner's radius, the reconstruction starts again from it (as for ``refine_focal``).
-        The result's ``distortion`` is the one found.
+        The result's ``distortion`` is the one found. Then it is checked by one more
+        reconstruction with k1 held at the one given (f refined alone, with
+        ``refine_focal``): when the camera ran off (k1 at 90 % of its bound or f moved by a
+        factor 3: a fisheye) that one is returned, or, when its f ran off too, one with f
+        and k1 held; when the term was kept and frames are left out, the one with k1 held
+        is returned if it registers more frames. A note says so.
 
     Returns
     -------
