@@ -303,9 +303,9 @@ def sequence(
     h, w = frames[0].shape[:2]
     print(f"  {name}: {n} frames {w} x {h}", file=sys.stderr)
     runs: list[tuple[str, dict[str, Any]]] = []
-    runs.append(("imageform CLI before (f refined)", run_cli(folder, endo, before)))
+    runs.append(("imageform CLI before (--before)", run_cli(folder, endo, before)))
     after = run_cli(folder, endo, ROOT / "src")
-    runs.append(("imageform CLI after (f and k1 refined)", after))
+    runs.append(("imageform CLI after (this checkout)", after))
     f0 = after.get("f0") or runs[0][1].get("f0") or 1.2 * max(w, h)
     cached = folder / "k1-pycolmap.json"
     if cached.exists():
