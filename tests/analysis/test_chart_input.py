@@ -377,3 +377,35 @@ def test_cli_harmonize_two_devices_photo_against_cropped(
         assert res["reference"] == str(ref) and res["mean_before"] > 5
         after[name] = res["mean_after"]
     assert after["photo"] < 2.0 and abs(after["photo"] - after["crop"]) < 0.5, after
+
+
+@pytest.mark.parametrize("space", ["adobe_rgb", "prophoto", "rec2020", "linear_srgb"])
+def test_chart_white_balance_in_the_files_own_space(space: str) -> None:
+    """A chart photographed under a cast, stored in another RGB space or in linear light:
+    the gains are the cast's inverse, as for sRGB (the patches were decoded with sRGB's curve
+    and compared with sRGB references: Adobe RGB 0.7746/1.4028 for 0.7778/1.4, linear light
+    0.5756/2.0713, ProPhoto 1.0931 for 1.4)."""
+    from imageform.color import (
+        chromatic_adaptation,
+        decode,
+        encode,
+        linear_rgb_to_xyz,
+        xyz_to_linear_rgb,
+    )
+
+    photo = synthetic_chart_photo(cast=(1.0, 1.0, 1.0), shading=0.0, noise=0.0, rng=3).image
+    base = space.removeprefix("linear_")
+    xyz = np.asarray(linear_rgb_to_xyz(decode(photo, "srgb"), "srgb"))
+    if base == "prophoto":  # neutral in ProPhoto is its D50 white
+        xyz = np.asarray(chromatic_adaptation(xyz, "D65", "D50"))
+    cast = np.array([0.9, 0.7, 0.5])
+    lin = np.clip(np.asarray(xyz_to_linear_rgb(xyz, base)) * cast, 0.0, 1.0)
+    transfer = "linear" if space.startswith("linear") else base
+    enc = np.asarray(encode(lin, transfer))
+    out, gains = chart_white_balance(enc, transfer=transfer, space=base)
+    np.testing.assert_allclose(gains / gains[1], cast[1] / cast, rtol=2e-3)
+    np.testing.assert_allclose(decode(out, transfer), lin * gains, atol=1e-6)
+    with pytest.raises(UnknownOptionError, match="transfer function"):
+        chart_white_balance(enc, transfer="srbg")
+    with pytest.raises(UnknownOptionError, match="RGB space"):
+        chart_white_balance(enc, space="adobe")

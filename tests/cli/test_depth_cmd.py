@@ -171,6 +171,23 @@ def test_depth_census_step_option(files: tuple[Path, StereoScene], tmp_path: Pat
     assert main([*base, "--census-step", "-1", "-o", str(tmp_path / "x.npy")]) == 2
 
 
+def test_depth_plane_fill_option(files: tuple[Path, StereoScene], tmp_path: Path) -> None:
+    """--plane-fill is the default and reaches stereo_disparity; --no-plane-fill gives the
+    function's map with plane_fill=False (the same or, where a flat region took a plane,
+    different values)."""
+    d, _ = files
+    base = ["depth", str(d / "left.png"), str(d / "right.png"), "--camera", str(d / "rig.toml")]
+    base += ["--num-disparities", "48", "--disparity"]
+    maps = []
+    for extra in ([], ["--plane-fill"], ["--no-plane-fill"]):
+        out = tmp_path / f"p{len(maps)}.npy"
+        assert main([*base, *extra, "-o", str(out)]) == 0
+        maps.append(np.load(out))
+    np.testing.assert_array_equal(maps[0], maps[1])
+    assert maps[2].shape == maps[0].shape
+    assert main([*base, "--plane-fill=3", "-o", str(tmp_path / "x.npy")]) == 2
+
+
 def test_depth_cost_window_option(
     files: tuple[Path, StereoScene], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

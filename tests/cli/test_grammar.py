@@ -300,6 +300,34 @@ def test_a_data_output_under_another_name_is_refused_first(
     assert not out.exists()
 
 
+#: The commands whose output is one image file.
+IMAGE_OUTPUTS = [
+    name
+    for name, wf in WORKFLOWS.items()
+    if wf.output is not None
+    and not wf.output.folder
+    and not set(wf.suffixes) - {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy"}
+]
+
+
+@pytest.mark.parametrize("name", IMAGE_OUTPUTS)
+def test_an_image_output_under_another_name_is_refused_first(name: str, tmp_path: Path) -> None:
+    """``undistort -o u.json`` (and every image command) computed the whole result and then
+    failed in the writer with 'unknown image file type': refused before any input is read
+    (the inputs here do not exist), naming the suffixes the command writes."""
+    from imageform.errors import InvalidInputError
+    from imageform.workflows import execute
+
+    wf = WORKFLOWS[name]
+    required = _required(wf)
+    inputs = {i.name: ["nothere.png"] if i.many else "nothere.png" for i in wf.inputs}
+    out = tmp_path / "result.json"
+    kinds = ", ".join(wf.suffixes[:-1]) + f" or {wf.suffixes[-1]}"
+    with pytest.raises(InvalidInputError, match=rf"^{name} writes an image: give -o a {kinds} "):
+        execute(wf, out=out, options=wf.make_options(**required), **inputs)
+    assert not out.exists()
+
+
 def _doc_blocks() -> list[tuple[str, list[str]]]:
     """Each shell block of the docs as the list of its imageform command lines, in order."""
     blocks: list[tuple[str, list[str]]] = []

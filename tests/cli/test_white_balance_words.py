@@ -203,3 +203,35 @@ def test_bad_masks(
     write_image(small, np.full((8, 8), 255, np.uint8))
     assert main(["white-balance", str(src), "-o", str(out), "--mask", str(small)]) == 1
     assert "is 8 x 8 px, the image 128 x 128 px" in capsys.readouterr().err
+
+
+def test_chart_method_reads_the_files_own_space(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--method chart`` on an Adobe RGB file decodes the patches with Adobe RGB's curve and
+    keeps the profile (it decoded them as sRGB: gains 0.7746/1.4028 for 0.7778/1.4); a
+    ``--chart`` file in another space is refused, nothing written."""
+    import json
+
+    from imageform.analysis import synthetic_chart_photo
+    from imageform.color import convert, encode
+    from imageform.io import image_color_space, write_image
+
+    photo = synthetic_chart_photo(cast=(1.0, 1.0, 1.0), shading=0.0, noise=0.0, rng=3).image
+    cast = np.array([0.9, 0.7, 0.5])
+    lin = np.clip(np.asarray(convert(photo, "srgb", "linear_adobe_rgb")) * cast, 0, 1)
+    src = tmp_path / "adobe.tif"
+    write_image(src, np.asarray(encode(lin, "adobe_rgb"), np.float32), color_space="adobe_rgb")
+    out = tmp_path / "out.tif"
+    assert main(["white-balance", str(src), "--method", "chart", "-o", str(out), "--json"]) == 0
+    gains = np.array(json.loads(capsys.readouterr().out)["gains"])
+    np.testing.assert_allclose(gains / gains[1], cast[1] / cast, rtol=2e-3)
+    assert image_color_space(out).name == "adobe_rgb"
+    other = tmp_path / "srgb.png"
+    write_image(other, photo)
+    bad = tmp_path / "bad.tif"
+    args = ["white-balance", str(src), "--method", "chart", "--chart", str(other)]
+    assert main([*args, "-o", str(bad)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "declares srgb, IMAGE declares adobe_rgb: convert one" in err
+    assert len(err.splitlines()) == 1 and not bad.exists()

@@ -22,7 +22,7 @@ from imageform.geometry import (
     stereo_disparity,
     stereo_rectify,
 )
-from imageform.geometry.stereo_matching import _grey, _match
+from imageform.geometry.stereo_matching import _grey, _match, _plane_fill
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from stereo_scenes import render_pair
@@ -334,12 +334,77 @@ def test_cost_window_averages_sensor_noise_on_a_board() -> None:
     inner = (slice(10, h - 10), slice(48 + 10, w - 10))
 
     def bad(cw: int) -> float:
-        disp = stereo_disparity(*u8, num_disparities=48, cost_window=cw)[inner]
+        disp = stereo_disparity(*u8, num_disparities=48, cost_window=cw, plane_fill=False)
+        disp = disp[inner]
         return float(np.mean(~(np.abs(disp - d) <= 1)))  # invalid or more than 1 px off
 
     before, after = bad(1), bad(3)
     assert before > 0.05
     assert after < before / 3
+
+
+def _slanted_board(seed: int, h: int = 120, w: int = 240, sq: int = 24):  # type: ignore[no-untyped-def]
+    """A board slanted about its vertical axis: d = 20 + 0.12 x, flat squares, sensor noise."""
+    rng = np.random.default_rng(seed)
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    d = 20.0 + 0.12 * x
+
+    def board(u: np.ndarray) -> np.ndarray:  # u: the board's own coordinate
+        return np.where(((np.floor(u / sq) + np.floor(y / sq)) % 2) == 0, 60.0, 190.0)
+
+    left = board(x) + rng.normal(0, 2.0, (h, w))
+    # the right view sees the board point u at x_r = u - d(u): sample u for each x_r
+    u = np.linspace(0, w + 60, 8 * (w + 60))
+    xr = u - (20.0 + 0.12 * u)
+    uu = np.interp(x, xr, u)
+    right = board(uu) + rng.normal(0, 2.0, (h, w))
+    u8 = [np.clip(np.round(im), 0, 255).astype(np.uint8) for im in (left, right)]
+    return u8[0], u8[1], d
+
+
+def test_plane_fill_takes_a_slanted_boards_plane_in_its_squares() -> None:
+    """SGM's paths carry one disparity into a flat square (the fronto-parallel bias); the
+    plane of the square's textured rim follows the slant (benchmarks/check_stereo_slant.py's
+    board pairs)."""
+    left, right, truth = _slanted_board(7)
+    inner = (slice(10, -10), slice(64 + 10, -10))
+
+    def bad(fill: bool) -> float:
+        d = stereo_disparity(left, right, num_disparities=64, plane_fill=fill)
+        return float(np.mean(~(np.abs(d - truth)[inner] <= 1)))  # invalid or > 1 px off
+
+    before, after = bad(False), bad(True)
+    assert before > 0.3  # measured 0.56
+    assert after < before / 2  # measured 0.19
+
+
+def test_plane_fill_fits_the_rim_and_leaves_a_rim_across_two_surfaces() -> None:
+    h, w = 200, 300  # 2 % of the image: 1200 pixels
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    rng = np.random.default_rng(2)
+    grey = rng.uniform(0, 255, (h, w)).astype(np.float32)  # texture everywhere ...
+    grey[60:90, 100:140] = 128.0  # ... but a flat square (its 5 x 5 flat part 26 x 36)
+    flat = (slice(62, 88), slice(102, 138))
+    plane = (5.0 + 0.05 * x - 0.02 * y).astype(np.float32)
+    disp = plane.copy()
+    disp[flat] = 7.0  # the square given one disparity (fronto-parallel)
+    disp[70:75, 110:115] = np.nan
+    out = _plane_fill(disp, grey, 0, 16)
+    np.testing.assert_allclose(out[flat], plane[flat], atol=1e-3)
+    np.testing.assert_array_equal(np.delete(out, np.s_[62:88], 0), np.delete(disp, np.s_[62:88], 0))
+    # the band: the first min + num - 1 columns stay as they were
+    out = _plane_fill(disp, grey, 0, 120)
+    assert np.array_equal(out[:, :119], disp[:, :119], equal_nan=True)
+    np.testing.assert_allclose(out[62:88, 119:138], plane[62:88, 119:138], atol=1e-3)
+    # a rim on two surfaces (a step of 6 px through the square): no plane fits 80 % of it
+    two = np.where(x < 120, plane, plane + 6.0).astype(np.float32)
+    two[flat] = 7.0
+    np.testing.assert_array_equal(_plane_fill(two, grey, 0, 16), two)
+    # a flat region over 2 % of the image is left alone (Middlebury Venus's background)
+    big = grey.copy()
+    big[50:100, 90:150] = 128.0
+    disp[50:100, 90:150] = 7.0
+    np.testing.assert_array_equal(_plane_fill(disp, big, 0, 16), disp)
 
 
 def test_median_filter_fills_isolated_invalid_pixels(scene) -> None:  # type: ignore[no-untyped-def]
@@ -531,7 +596,8 @@ def test_census_threshold_matches_flat_squares_with_faint_shading() -> None:
         ok = np.isfinite(v)
         return float(ok.mean()), float(np.mean(np.abs(v[ok] - 9) > 1))
 
-    one = {"num_disparities": 16, "cost_window": 1}  # each pixel's cost alone
+    # each pixel's cost alone, as matched (the plane fill would hide the scatter)
+    one = {"num_disparities": 16, "cost_window": 1, "plane_fill": False}
     plain = scores(stereo_disparity(left, right, census_step=None, **one))
     assert plain[1] > 0.25 and plain[0] < 0.9
     for thr in (2, 4.0):
@@ -644,6 +710,8 @@ def test_bad_input_is_refused_in_one_line(small) -> None:  # type: ignore[no-unt
         stereo_disparity(L, R, vertical="yes")  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="median_filter"):
         stereo_disparity(L, R, median_filter="yes")  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="plane_fill"):
+        stereo_disparity(L, R, plane_fill=1)  # type: ignore[arg-type]
     with pytest.raises(InvalidInputError, match="subpixel") as info:
         stereo_disparity(L, R, subpixel="cubic")  # type: ignore[arg-type]
     assert "\n" not in str(info.value)

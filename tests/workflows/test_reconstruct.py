@@ -569,20 +569,25 @@ def test_room_photographs_with_exif_focal_length(
     assert sfm_scenes.align_rms(np.array(C_est), C_true) < 0.01
 
 
-def test_a_fisheye_without_a_camera_file_is_said_not_to_settle(
+def test_a_fisheye_without_a_camera_file_runs_off_and_falls_back(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """The C3VD colonoscope (a Kannala-Brandt fisheye, f 199 px; tests/data/endo) without a
-    camera file: f and one radial term run off along their valley (537.6 -> 644 -> 1696 ->
-    2487 px, k1 -17.8) and still move after two restarts; the note says the frames do not
-    fix the camera instead of leaving the camera file to speak for itself."""
+    camera file: f and one radial term run off along their valley (537.6 -> 2487 px, k1
+    -17.8); the run-off is said and the radial term held, f refined alone (it does not settle
+    either, and says so) instead of a camera file that looks like a calibration."""
     endo = Path(__file__).resolve().parents[1] / "data" / "endo"
     out = tmp_path / "rec"
     args = [str(endo / "*.jpg"), "-o", str(out), "--auto-mask", "--contrast-threshold", "0.01"]
     assert main(["reconstruct", *args]) == 0
     err = capsys.readouterr().err
+    assert "the camera ran off" in err and "k1 held at 0.0000, f refined alone" in err, err
     assert "the camera did not settle" in err and "calibrate the camera" in err, err
+    intr = json.loads((out / "metrics.json").read_text())["intrinsics"]
+    assert intr["fallback"].startswith("the camera ran off"), intr
+    assert intr["k1"] == 0.0 and intr["focal_px"] < 537.6, intr
     # with the true camera the reconstruction settles: no such note
     again = [*args[:2], str(tmp_path / "rec2"), *args[3:], "--camera", str(endo / "camera.toml")]
     assert main(["reconstruct", *again]) == 0
-    assert "did not settle" not in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "did not settle" not in err and "ran off" not in err

@@ -286,12 +286,43 @@ def _as_chart_patches(chart: object, name: str, layout: str = "auto") -> Any:
     return chart
 
 
-def _neutral_illuminant(pat: ChartPatches, neutrals: tuple[int, ...]) -> np.ndarray:
-    r"""Estimate the illuminant's linear RGB from the neutral patches.
+def _neutral_reference(idx: np.ndarray, space: str) -> np.ndarray:
+    """Return the neutral patches' published values in linear ``space``, adapted to its white.
 
-    :math:`e_c = \sum_i m_{ic} r_{ic} / \sum_i r_{ic}^2` (least squares of measured = e × ref).
+    The chart's sRGB values (D65) go to XYZ, are adapted to the space's white by Bradford's
+    transform (a balanced image shows the space's white as neutral) and converted to the
+    space's linear RGB.
     """
     from imageform.analysis.synthetic import COLORCHECKER_SRGB8
+    from imageform.color import (
+        RGB_SPACES,
+        chromatic_adaptation,
+        linear_rgb_to_xyz,
+        xyz_to_linear_rgb,
+    )
+
+    ref = srgb_decode(np, np.asarray(COLORCHECKER_SRGB8, dtype=np.float64)[idx] / 255.0)
+    if space == "srgb":
+        return np.asarray(ref)
+    xyz = np.asarray(linear_rgb_to_xyz(ref, "srgb"), dtype=np.float64)
+    white = RGB_SPACES[space].white_xy
+    if not np.allclose(white, RGB_SPACES["srgb"].white_xy):
+        xyz = np.asarray(chromatic_adaptation(xyz, "D65", np.asarray(white)), dtype=np.float64)
+    return np.asarray(xyz_to_linear_rgb(xyz, space), dtype=np.float64)
+
+
+def _neutral_illuminant(
+    pat: ChartPatches,
+    neutrals: tuple[int, ...],
+    transfer: str = "srgb",
+    space: str = "srgb",
+) -> np.ndarray:
+    r"""Estimate the illuminant's linear RGB from the neutral patches.
+
+    :math:`e_c = \sum_i m_{ic} r_{ic} / \sum_i r_{ic}^2` (least squares of measured = e × ref),
+    the measured means decoded with ``transfer``, the references in linear ``space``.
+    """
+    from imageform.color import decode
 
     if pat.means.shape[0] != 24:
         raise InvalidInputError(
@@ -303,8 +334,11 @@ def _neutral_illuminant(pat: ChartPatches, neutrals: tuple[int, ...]) -> np.ndar
             f"every neutral patch {list(neutrals)} of the chart is saturated or missing: no "
             "white balance from it"
         )
-    ref = srgb_decode(np, np.asarray(COLORCHECKER_SRGB8, dtype=np.float64)[idx] / 255.0)
-    meas = srgb_decode(np, np.clip(np.asarray(pat.means, dtype=np.float64)[idx], 0.0, None))
+    ref = _neutral_reference(idx, space)
+    meas = np.asarray(
+        decode(np.clip(np.asarray(pat.means, dtype=np.float64)[idx], 0.0, None), transfer),
+        dtype=np.float64,
+    )
     e = np.sum(meas * ref, axis=0) / np.sum(ref * ref, axis=0)
     if not np.all(e > 0):
         raise DegenerateConfigurationError(
@@ -313,11 +347,19 @@ def _neutral_illuminant(pat: ChartPatches, neutrals: tuple[int, ...]) -> np.ndar
     return np.asarray(e)
 
 
-def _balance_block(rgb: np.ndarray, gains: np.ndarray, clip: bool) -> np.ndarray:
-    lin = srgb_decode(np, rgb) * gains.astype(rgb.dtype)
+def _balance_block(
+    rgb: np.ndarray, gains: np.ndarray, clip: bool, transfer: str = "srgb"
+) -> np.ndarray:
+    from imageform.color import decode, encode
+
+    if transfer == "srgb":  # the common case, without the generic dispatch
+        lin = srgb_decode(np, rgb) * gains.astype(rgb.dtype)
+    else:
+        lin = np.asarray(decode(rgb, transfer)) * gains.astype(rgb.dtype)
     if clip:
         lin = np.clip(lin, 0.0, 1.0)
-    return np.asarray(srgb_encode(np, lin), dtype=rgb.dtype)
+    out = srgb_encode(np, lin) if transfer == "srgb" else encode(lin, transfer)
+    return np.asarray(out, dtype=rgb.dtype)
 
 
 def chart_white_balance(
@@ -327,6 +369,8 @@ def chart_white_balance(
     chart_layout: str = "auto",
     normalize: str = "mean",
     clip: bool = False,
+    transfer: str = "srgb",
+    space: str = "srgb",
 ) -> WhiteBalanceResult:
     r"""White-balance an image from the neutral patches of a ColorChecker.
 
@@ -353,11 +397,20 @@ def chart_white_balance(
         Keep the mean grey of the illuminant, or the green channel.
     clip : bool, keyword-only
         Clip the balanced linear values to [0, 1] before encoding.
+    transfer : str, keyword-only
+        The image's (and the chart's patch means') encoding, a key of
+        :data:`imageform.color.TRANSFER_FUNCTIONS`: ``"srgb"``, ``"linear"`` for linear
+        light, ``"adobe_rgb"``, ``"prophoto"``, ... (what the file declares).
+    space : str, keyword-only
+        The image's RGB space (a key of :data:`imageform.color.RGB_SPACES`): the chart's
+        published neutrals are taken into it (Bradford-adapted to its white, so ProPhoto's
+        D50 white counts as neutral) before the fit.
 
     Returns
     -------
     imageform.color.WhiteBalanceResult
-        ``(image, gains)``: the balanced image (encoded sRGB, floats) and the gains (3,).
+        ``(image, gains)``: the balanced image (floats, encoded with ``transfer``) and the
+        gains (3,).
 
     Raises
     ------
@@ -383,6 +436,10 @@ def chart_white_balance(
     norm = check_option(normalize, ("mean", "green"), "gain normalisation (normalize)")
     clip = as_bool(clip, "clip")
     check_option(chart_layout, CHART_LAYOUTS, "chart layout (chart_layout)")
+    from imageform.color import RGB_SPACES, TRANSFER_FUNCTIONS
+
+    transfer = check_option(transfer, tuple(TRANSFER_FUNCTIONS), "transfer function (transfer)")
+    space = check_option(space, tuple(RGB_SPACES), "RGB space (space)")
     rgb = image_in(image)
     if rgb.ndim != 3:
         raise InvalidInputError(f"expected image of shape (H, W, 3), got {describe(rgb)}")
@@ -396,11 +453,11 @@ def chart_white_balance(
                 f"{describe(pat)}"
             )
         pat = ChartPatches(arr, np.zeros_like(arr), np.zeros(24, bool), np.zeros(24, bool))
-    e = _neutral_illuminant(pat, COLORCHECKER_NEUTRALS)
+    e = _neutral_illuminant(pat, COLORCHECKER_NEUTRALS, transfer, space)
     ref = float(np.mean(e)) if norm == "mean" else float(e[1])
     gains = ref / e
     if is_dask(rgb):
-        out = rgb.map_blocks(_balance_block, gains, clip, dtype=rgb.dtype)
+        out = rgb.map_blocks(_balance_block, gains, clip, transfer, dtype=rgb.dtype)
     else:
-        out = _balance_block(np.asarray(rgb), gains, clip)
+        out = _balance_block(np.asarray(rgb), gains, clip, transfer)
     return WhiteBalanceResult(out, gains)

@@ -1298,7 +1298,12 @@ def reconstruct_sequence(
         is undistorted again with the lens found (the pairs, PnP and the triangulation use
         it); when its displacement at the image's corner moves by more than 1 % of the
         corner's radius, the reconstruction starts again from it (as for ``refine_focal``).
-        The result's ``distortion`` is the one found.
+        The result's ``distortion`` is the one found. Then it is checked by one more
+        reconstruction with k1 held at the one given (f refined alone, with
+        ``refine_focal``): when the camera ran off (k1 at 90 % of its bound or f moved by a
+        factor 3: a fisheye) that one is returned, or, when its f ran off too, one with f
+        and k1 held; when the term was kept and frames are left out, the one with k1 held
+        is returned if it registers more frames. A note says so.
 
     Returns
     -------
@@ -1330,12 +1335,32 @@ def reconstruct_sequence(
         "radial_given": _radial_start(distortion) if refine_distortion else None,
         "cache": cache,
     }
-    best = _one_model(images, K, distortion, kw)
     if not (refine_focal or refine_distortion):
+        return _one_model(images, K, distortion, kw)
+    best = _self_calibrated(images, K, distortion, kw)
+    if not refine_distortion:
         return best
-    # the focal length (or the lens) moved far from where it started: the first frames
-    # were registered with a wrong one (and some not at all); again from the one found,
-    # twice at most
+    return _radial_checked(images, K, distortion, kw, best)
+
+
+def _self_calibrated(
+    images: Sequence[ArrayLike],
+    K: ArrayLike,
+    distortion: DistortionModel | None,
+    kw: dict[str, Any],
+) -> Reconstruction:
+    """One model whose focal length (and lens) are refined, restarted from the camera found.
+
+    The focal length (or the lens) moved far from where it started: the first frames were
+    registered with a wrong one (and some not at all); again from the one found, twice at
+    most (:func:`reconstruct_sequence`'s ``refine_focal`` and ``refine_distortion``).
+    """
+    refine_distortion = bool(kw["refine_distortion"])
+    cache = kw["cache"]
+    cache.pop("pairs", None)  # verified with another camera, perhaps; the keypoints stay
+    best = _one_model(images, K, distortion, kw)
+    if not (kw["refine_focal"] or refine_distortion):
+        return best
     K_start = np.array(K, np.float64)
     lens_start = distortion
     h, w = np.asarray(images[0]).shape[:2]
@@ -1400,6 +1425,114 @@ def reconstruct_sequence(
                 ],
             )
     return best
+
+
+#: ``refine_distortion``: the camera ran off when the radial term reached this share of its
+#: bound (:math:`|k_1| r_{max}^2 \ge 0.9 \cdot 0.3`, :math:`r_{max}` the farthest keypoint's
+#: normalised radius) or the focal length moved by this factor or more from the one given
+_RUNOFF_BOUND = 0.9
+_RUNOFF_FACTOR = 3.0
+
+
+def _ran_off(rec: Reconstruction, f_given: float, feats: Sequence[Features] | None) -> str | None:
+    """Why the camera of ``rec`` ran off (k1 at its bound, f moved a factor 3), or None.
+
+    A lens that one radial term does not fit (a fisheye) lets f and k1 slide along their
+    valley (the C3VD colonoscope from 537.6 px: f 2487 px, k1 -17.8, its working camera's f
+    199 px), f far from any camera the frames were taken with. ``feats``: the keypoints
+    (the bound is on their farthest radius, :func:`_schur_lm`); None: f alone is checked. A
+    camera that did not settle but stayed within the factor keeps its note
+    (:func:`_self_calibrated`) and is no run-off.
+    """
+    if rec.K is None:
+        return None
+    f = float(rec.K[0, 0])
+    k1 = _radial_start(rec.distortion) if rec.distortion is not None else 0.0
+    why: list[str] = []
+    if feats is not None and k1 != 0.0:
+        reg = np.flatnonzero(rec.registered).tolist()
+        xy = np.concatenate([feats[i].xy for i in reg]) if reg else np.zeros((0, 2))
+        r2 = float(np.max(np.sum(((xy - rec.K[:2, 2]) / f) ** 2, axis=1), initial=0.0))
+        share = abs(k1) * r2 / _RADIAL_MAX
+        if share >= _RUNOFF_BOUND:
+            why.append(
+                f"k1 = {k1:.3f} at its bound (|k1| r_max^2 = {abs(k1) * r2:.3f}, "
+                f"{_RADIAL_MAX:g} allowed)"
+            )
+    if max(f / f_given, f_given / f) >= _RUNOFF_FACTOR:
+        why.append(f"f = {f:.1f} px, {f / f_given:.2f} times the {f_given:.1f} px given")
+    return "; ".join(why) or None
+
+
+def _radial_checked(
+    images: Sequence[ArrayLike],
+    K: ArrayLike,
+    distortion: DistortionModel | None,
+    kw: dict[str, Any],
+    best: Reconstruction,
+) -> Reconstruction:
+    """Check the radial term ``refine_distortion`` found against holding it.
+
+    Two failures are caught by a reconstruction with k1 held at the one given (f refined
+    alone, with ``refine_focal``):
+
+    - the camera ran off (:func:`_ran_off`): the one with k1 held is kept when it does not
+      run off itself, else f and k1 are both held at the ones given;
+    - the term kept cost frames: fitted from a model of a few frames it moves the points
+      and the keypoints (a phone's JPEGs, corrected already: k1 +0.039, 8.4 % lower error)
+      and a frame whose PnP held 12 inliers of 14 holds 4; when the model with k1 held
+      registers more frames, it is kept.
+
+    Each is said in a note of the model returned.
+    """
+    k1_given = _radial_start(distortion)
+    k1_found = _radial_start(best.distortion) if best.distortion is not None else 0.0
+    f_given = float(np.asarray(K, np.float64)[0, 0])
+    feats = kw["cache"].get("feats")
+    why = _ran_off(best, f_given, feats)
+    costs = k1_found != k1_given and not bool(best.registered.all())
+    if why is None and not costs:
+        return best
+    assert best.K is not None
+    n, nreg = len(images), int(best.registered.sum())
+    found = f"f = {float(best.K[0, 0]):.1f} px, k1 = {k1_found:.4f}, {nreg} of {n} frames"
+    held_kw = {**kw, "refine_distortion": False, "radial_given": None}
+    try:
+        held: Reconstruction | None = _self_calibrated(images, K, distortion, held_kw)
+    except DegenerateConfigurationError:
+        held = None
+    if why is None:  # the term kept: does it cost frames?
+        if held is None or int(held.registered.sum()) <= nreg:
+            return best
+        assert held.K is not None
+        note = (
+            f"the radial term cost frames: with it {found}; held at k1 = {k1_given:.4f} "
+            f"(f refined alone: {float(held.K[0, 0]):.1f} px) {int(held.registered.sum())} "
+            "frames: held"
+        )
+        return replace(held, notes=[*held.notes, note])
+    said = f"the camera ran off ({found}: {why})"
+    held_why = None if held is None else _ran_off(held, f_given, None)
+    if held is not None and held_why is None:
+        assert held.K is not None
+        note = (
+            f"{said}: k1 held at {k1_given:.4f}, f refined alone: "
+            f"{float(held.K[0, 0]):.1f} px, {int(held.registered.sum())} of {n} frames"
+        )
+        return replace(held, notes=[*held.notes, note])
+    fixed_kw = {**held_kw, "refine_focal": False}
+    kw["cache"].pop("pairs", None)
+    try:
+        fixed = _one_model(images, K, distortion, fixed_kw)
+    except DegenerateConfigurationError:
+        return replace(best, notes=[*best.notes, said + ": kept (nothing else registers)"])
+    note = (
+        f"{said}; f refined alone ran off too"
+        + ("" if held is None or held.K is None else f" (f = {float(held.K[0, 0]):.1f} px)")
+        + f": f and k1 held at the ones given ({f_given:.1f} px, {k1_given:.4f}), "
+        f"{int(fixed.registered.sum())} of {n} frames; calibrate the camera and give it"
+    )
+    return replace(fixed, notes=[*fixed.notes, note])
 
 
 #: With ``refine_focal``: a focal length that moves by more than this share starts the

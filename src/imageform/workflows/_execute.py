@@ -72,16 +72,21 @@ def _check_data_suffix(wf: Workflow, out: Path) -> None:
     """Refuse a main output of a data file (camera file, table, JSON) under another kind's name.
 
     ``calibrate -o cam.json`` or ``emva -o e.png`` would write TOML or JSON there, ``gamut -o
-    g.txt`` failed in matplotlib. For workflows whose ``suffixes`` name a file that is not an
-    image (the image writers refuse a wrong suffix themselves), before anything is read.
+    g.txt`` failed in matplotlib; ``undistort -o u.json`` was refused by the image writer only
+    after the whole computation. Before anything is read; a folder output is left to
+    :func:`_check_folder_name`.
     """
-    if not set(wf.suffixes) - set(IMAGE_SUFFIXES):
+    if wf.output is not None and wf.output.folder:
         return
-    if out.suffix.lower() not in wf.suffixes:
+    if out.suffix.lower() in wf.suffixes:
+        return
+    if set(wf.suffixes) - set(IMAGE_SUFFIXES):
         kinds = " or ".join(wf.suffixes)
         raise InvalidInputError(
             f"{wf.name} writes a {kinds} file: give -o a {kinds} name, not {out.name!r}"
         )
+    kinds = ", ".join(wf.suffixes[:-1]) + f" or {wf.suffixes[-1]}"
+    raise InvalidInputError(f"{wf.name} writes an image: give -o a {kinds} name, not {out.name!r}")
 
 
 #: Names of files, never of the folder a folder output (simulate, reconstruct...) writes.

@@ -577,11 +577,20 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
 
         src = Path(image) if opts.chart is None else opts.chart
         same = src.resolve() == Path(image).resolve()
+        if not same and src.suffix.lower() != ".csv" and image_color_space(src).name != declared:
+            # the patches are decoded with the image's curve and the gains applied in its
+            # space: a chart file encoded otherwise would give wrong gains without a word
+            raise InvalidInputError(
+                f"--chart {src} declares {image_color_space(src).name or 'srgb'}, IMAGE "
+                f"declares {declared or 'srgb'}: convert one to the other's space first"
+            )
         chart = _charts.read_chart(
             src, opts, flag=flag, layout=opts.chart_layout, image=img if same else None
         )
         _charts.notes(run, chart, flag)
-        balanced, gains = chart_white_balance(img, chart.patches, normalize=opts.normalize)
+        balanced, gains = chart_white_balance(
+            img, chart.patches, normalize=opts.normalize, transfer=transfer, space=space
+        )
         if opts.device == "cuda":
             run.note("note: --device cuda: --method chart runs on the CPU")
         n_out = write(run, out, np.asarray(balanced), opts, like=img, color_space=tag)

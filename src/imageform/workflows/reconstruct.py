@@ -459,6 +459,12 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     lens = rec.distortion if refine_lens else distortion
     intrinsics["distortion_refined"] = refine_lens
     intrinsics["k1"] = float(getattr(lens, "k1", 0.0)) if refine_lens else None
+    # the radial term's check: the camera ran off (a fisheye) or the term cost frames, and
+    # what was held instead (reconstruct_sequence's note); None when the term stood
+    intrinsics["fallback"] = next(
+        (n for n in rec.notes if n.startswith(("the camera ran off", "the radial term cost"))),
+        None,
+    )
     del images
     folder = run.folder(out)
     t2 = time.perf_counter()

@@ -456,6 +456,13 @@ class DepthOptions(ImageIn):
         minimum=1,
         maximum=7,
     )
+    plane_fill: bool = option(
+        True,
+        help="Give each flat region of the left view (a board's squares, a wall) the plane of "
+        "the disparities on its textured rim, where one plane fits 80 % of them: slanted "
+        "surfaces without texture follow their slant; --no-plane-fill keeps the matched "
+        "values (before 2026-11-30h).",
+    )
 
 
 def _pair_image(path: Path, opts: DepthOptions, size: tuple[int, int] | None, side: str) -> Any:
@@ -571,6 +578,7 @@ def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Pat
         census_threshold=opts.census_threshold,
         census_step=opts.census_step,
         cost_window=opts.cost_window,
+        plane_fill=opts.plane_fill,
         vertical=rect.vertical,
     )
     # left pixels whose source lies outside the left image hold no measurement
