@@ -120,6 +120,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "track-breaks": "benchmarks/check_track_breaks.py",
     "track-fresh": "benchmarks/check_track_fresh.py",
     "track-marker": "benchmarks/check_track_marker.py",
+    "track-speed": "benchmarks/check_track_speed.py",
     "track-symmetric": "benchmarks/check_track_symmetric.py",
     "remap": "benchmarks/bench_remap.py",
     "report": "benchmarks/bench_report.py",
