@@ -213,6 +213,15 @@ def block_means_u8(g8: NDArray[np.uint8], f: int) -> NDArray[np.uint8]:  # pragm
     hgt, wid = g8.shape
     h2, w2 = hgt // f, wid // f
     out = np.empty((h2, w2), dtype=np.uint8)
+    if f == 2:  # a 4K frame's case, unrolled
+        for i in range(h2):
+            ra = g8[2 * i]
+            rb = g8[2 * i + 1]
+            o = out[i]
+            for j in range(w2):
+                s = np.int32(ra[2 * j]) + ra[2 * j + 1] + rb[2 * j] + rb[2 * j + 1]
+                o[j] = (s + 2) >> 2
+        return out
     acc = np.zeros(w2, dtype=np.int64)
     n = f * f
     half = n // 2
