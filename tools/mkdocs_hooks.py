@@ -121,6 +121,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "track-fresh": "benchmarks/check_track_fresh.py",
     "track-marker": "benchmarks/check_track_marker.py",
     "track-markers": "benchmarks/check_track_markers.py",
+    "track-speed": "benchmarks/check_track_speed.py",
     "track-symmetric": "benchmarks/check_track_symmetric.py",
     "remap": "benchmarks/bench_remap.py",
     "report": "benchmarks/bench_report.py",

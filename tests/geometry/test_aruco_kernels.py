@@ -242,3 +242,16 @@ def test_min_side_px_asks_for_the_full_resolution_search() -> None:
     assert len(full) == 17
     default = detect_aruco_markers(img, "5x5_100")
     assert set(default.ids.tolist()) <= set(full.ids.tolist())
+
+
+def test_block_means_u8_rounds_each_blocks_mean() -> None:
+    """The uint8 reduction of a 4K frame's marker search: each block's mean, rounded."""
+    from imageform._kernels.aruco import block_means_u8
+
+    g8 = np.random.default_rng(3).integers(0, 256, (37, 50), dtype=np.uint8)
+    for f in (2, 3):
+        h, w = 37 // f, 50 // f
+        ref = np.floor(g8[: h * f, : w * f].reshape(h, f, w, f).mean(axis=(1, 3)) + 0.5)
+        out = block_means_u8(g8, f)
+        assert out.dtype == np.uint8 and out.shape == (h, w)
+        np.testing.assert_array_equal(out, ref.astype(np.uint8))

@@ -348,6 +348,49 @@ def detect_charuco(
     return found
 
 
+def _detect_reduced(
+    image: NDArray[np.uint8], board: CharucoBoard, f: int, method: str = "gradient"
+) -> CharucoCorners:
+    """:func:`detect_charuco` of a uint8 grey ``image`` with its markers read ``f`` times smaller.
+
+    The markers are found in ``image`` reduced ``f`` times (block means,
+    :func:`imageform._kernels.aruco.block_means_u8`: ``f²`` times fewer pixels to threshold
+    and label) and their corners scaled back (the reduced pixel ``i`` covers the full pixels
+    ``f i .. f i + f - 1``: ``x = f x' + (f - 1) / 2``); the corners are then predicted from
+    them and refined, checked and kept at full resolution as :func:`detect_charuco` does, in
+    the markers' box grown by three squares (the rest of the frame is not converted to
+    floats). The markers' corners only seed the corners' prediction, which the full-resolution
+    refinement corrects (it starts within a pixel or two of the saddle). For the frames of a
+    4K camera, whose markers stay tens of pixels wide when halved (:class:`BoardTracker`);
+    markers smaller than ``f`` times the detector's 6 px are not found.
+    """
+    from imageform._kernels.aruco import block_means_u8
+
+    small = np.asarray(block_means_u8(np.ascontiguousarray(image), int(f)))
+    markers = _detect(_gray01(small, scratch=True), board.dictionary, source=small)
+    hgt, wid = image.shape
+    empty = CharucoCorners(np.zeros(0, np.int64), np.zeros((0, 2)), markers, board)
+    if len(markers) == 0:
+        return empty
+    full = ArucoMarkers(
+        markers.ids, markers.corners * f + (f - 1) / 2.0, markers.hamming, markers.dictionary
+    )
+    # the markers' box, grown by three squares (a corner is predicted from markers within two
+    # squares of it, and its seen-whole check looks one square beyond)
+    side = float(np.max(np.hypot(*(np.roll(full.corners, -1, axis=1) - full.corners).T)))
+    grow = 3.0 * side * board.square_length / board.marker_length
+    lo = np.floor(full.corners.reshape(-1, 2).min(axis=0) - grow).astype(int)
+    hi = np.ceil(full.corners.reshape(-1, 2).max(axis=0) + grow).astype(int)
+    x0, y0 = max(int(lo[0]), 0), max(int(lo[1]), 0)
+    x1, y1 = min(int(hi[0]) + 1, wid), min(int(hi[1]) + 1, hgt)
+    if x1 - x0 < 16 or y1 - y0 < 16:
+        return empty
+    offset = np.array([x0, y0], np.float64)
+    crop = ArucoMarkers(full.ids, full.corners - offset, full.hamming, full.dictionary)
+    found = detect_charuco(image[y0:y1, x0:x1], board, markers=crop, method=method)  # type: ignore[arg-type]
+    return CharucoCorners(found.ids, found.corners + offset, full, found.board)
+
+
 def _corners(
     g: NDArray[np.float64],
     board: CharucoBoard,

@@ -14,7 +14,9 @@ drawn in board coordinates on the live image.
 - **corner tracking**: when the last frame's pose is known, its corners are moved by their
   last motion (constant velocity) and refined in the new frame with the sub-pixel saddle
   refinement (:func:`~imageform.geometry.refine_corners`, a window of a third of a square,
-  then the detector's own window from there)
+  then the detector's own window from there: for a ChArUco board at most 25 px, as the
+  detector's; a wider one on a 4K phone video's squares put the corners 1-2 px off the
+  detected ones and no frame was tracked)
   instead of detecting the board again; the frame is accepted only when at least 80 % of
   the corners refine, none moves more than half a square from its prediction, and the PnP
   fit of all of them leaves every corner within 1.5 pixels (RMS within 0.75). A ChArUco
@@ -29,6 +31,13 @@ drawn in board coordinates on the live image.
   ``detect_charuco`` with ``method="gradient"``): the point-symmetry one was no nearer the
   truth on a rendered checkerboard video and cost half as much again a frame
   (benchmarks/results/track-symmetric-2026-11-29j.md);
+- **4K frames**: a ChArUco frame of at least 2560 pixels a side has its markers read on its
+  half (block means: a quarter of the pixels to threshold and label), the corners then
+  predicted, refined and checked at full resolution, only around the markers; the whole
+  frame is searched at full resolution when that finds too few corners for a pose, or
+  fewer than the last frame had (80 %) with a marker under 96 px among those read, and
+  when the last detection's markers were under 48 px
+  (benchmarks/results/track-speed-2026-11-30h.md);
 - **no search in vain**: a checkerboard not found in a soft frame is sought on coarser
   copies of it (a board smeared by motion, :func:`~imageform.geometry.find_checkerboard`);
   after ``_SMEAR_PATIENCE`` frames in a row where that found nothing (a webcam's frames
@@ -105,6 +114,24 @@ class BoardPose:
     def corners(self) -> int:
         """How many corners were used."""
         return int(self.image_points.shape[0])
+
+
+#: A ChArUco frame of at least this many pixels a side has its markers read on its half
+#: (:meth:`BoardTracker._reduction`), unless the last detection's markers were smaller than
+#: twice this many pixels a side.
+_REDUCE_FROM, _REDUCE_MIN_MARKER = 2560, 24.0
+#: A tracked ChArUco corner's final refinement window (half side, px) at most: the
+#: detector's (``charuco._predicted``).
+_MAX_FINE = 25
+
+
+def _marker_side(corners: NDArray[np.float64]) -> float:
+    """Return the shortest side (px) of the markers ``corners`` (n, 4, 2); 0 when none."""
+    c = np.asarray(corners, np.float64).reshape(-1, 4, 2)
+    if c.shape[0] == 0:
+        return 0.0
+    e = np.roll(c, -1, axis=1) - c
+    return float(np.hypot(e[..., 0], e[..., 1]).min())
 
 
 def _missing(searched: str = "none", uv: NDArray[np.float64] | None = None) -> BoardPose:
@@ -227,6 +254,10 @@ class BoardTracker:
         #: a ChArUco frame's tracked corners, blurred ones included, kept in case detection
         #: finds no board in the frame
         self._spare: tuple[NDArray[np.float64], NDArray[np.int64]] | None = None
+        #: the frame's size, and the last detection's smallest marker side in pixels (0:
+        #: none yet), which decide whether a ChArUco frame's markers are read reduced
+        self._frame: tuple[int, int] = (0, 0)
+        self._marker_px = 0.0
 
     def reset(self) -> None:
         """Forget the previous frames (a cut in the video)."""
@@ -234,16 +265,32 @@ class BoardTracker:
         self._prev_uv = {}
         self._since_detection = 0
         self._vain = self._quiet = 0
+        self._marker_px = 0.0
 
     # -- detection ------------------------------------------------------------------------
 
     def _detect(self, image: np.ndarray) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         """Return the corners (m, 2) in ``image`` and their indices into the board's points."""
         if self._charuco is not None:
-            from imageform.geometry.charuco import detect_charuco
+            from imageform.geometry.charuco import _detect_reduced, detect_charuco
 
+            f = self._reduction(image)
+            if f > 1:
+                # the markers read on the frame reduced f times, the corners refined at full
+                # resolution; the full-resolution search when that finds too few corners for
+                # a pose, or fewer than the last frame had while the markers it read are not
+                # all large (a marker lost to the reduction, not to a hand over the board)
+                found = _detect_reduced(image, self._charuco, f)
+                last = self._last.corners if self._last is not None and self._last.found else 0
+                side = _marker_side(found.markers.corners)
+                if len(found) >= self.min_corners and (
+                    len(found) >= 0.8 * last or side >= 4 * _REDUCE_MIN_MARKER
+                ):
+                    self._marker_px = side
+                    return np.asarray(found.corners, np.float64), np.asarray(found.ids, np.int64)
             # the gradient refinement, as the tracked frames': one method in a video
             found = detect_charuco(image, self._charuco, method="gradient")
+            self._marker_px = _marker_side(found.markers.corners)
             return np.asarray(found.corners, np.float64), np.asarray(found.ids, np.int64)
         from imageform.geometry.checkerboard import _tracking_search
 
@@ -257,6 +304,22 @@ class BoardTracker:
             return np.zeros((0, 2)), np.zeros(0, np.int64)
         uv = np.asarray(res.corners, np.float64)
         return uv, np.arange(uv.shape[0], dtype=np.int64)
+
+    def _reduction(self, image: np.ndarray) -> int:
+        """Return the factor by which a ChArUco frame's markers are read (1: not reduced).
+
+        2 for a uint8 grey frame of a camera of at least ``_REDUCE_FROM`` pixels a side
+        (4K), unless the last detection's markers were under ``_REDUCE_MIN_MARKER`` pixels
+        (twice that when halved): reading the markers of a 3840 x 2160 frame costs a
+        quarter as much on its half (benchmarks/results/track-speed-2026-11-30h.md).
+        """
+        if not (isinstance(image, np.ndarray) and image.dtype == np.uint8 and image.ndim == 2):
+            return 1
+        if max(self._frame) < _REDUCE_FROM or min(image.shape) < 64:
+            return 1
+        if 0 < self._marker_px < 2 * _REDUCE_MIN_MARKER:
+            return 1
+        return 2
 
     def _in(
         self, image: np.ndarray, box: tuple[int, int, int, int]
@@ -334,7 +397,10 @@ class BoardTracker:
         if self._charuco is not None:
             b = self._charuco
             gap = (b.square_length - b.marker_length) / 2 * np.sqrt(2) / b.square_length
-            fine = min(fine, int(0.6 * gap * square))
+            # at most the detector's own window (charuco._predicted's): a wider one on a 4K
+            # frame's squares moves the corners off the detected ones (benchmarks/results/
+            # track-speed-2026-11-30h.md), and costs its area
+            fine = min(fine, int(0.6 * gap * square), _MAX_FINE)
         res2 = refine_corners(
             crop, np.asarray(res.corners), half_window=max(2, fine), max_iter=40, tol=1e-4
         )
@@ -399,6 +465,7 @@ class BoardTracker:
         if a.ndim not in (2, 3) or a.shape[0] < 8 or a.shape[1] < 8:
             raise InvalidInputError(f"expected a frame as an (H, W[, 3]) image, got {describe(a)}")
         h, w = a.shape[:2]
+        self._frame = (h, w)
         self._quiet = self._quiet + 1 if self._vain >= _SMEAR_PATIENCE else 0
         self._frame_vain = False
         self._spare = None
