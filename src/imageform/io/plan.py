@@ -158,5 +158,6 @@ def read_plan(path: str | Path) -> Plan:
     if suffix in PLAN_MESH_SUFFIXES:
         return _read_mesh(p)
     raise InvalidInputError(
-        f"expected a plan as .csv or a mesh ({', '.join(PLAN_MESH_SUFFIXES)}), got {p.name!r}"
+        f"expected a plan as .csv or a mesh ({', '.join(PLAN_MESH_SUFFIXES)}), got "
+        f"{describe(p.name, 60)}"
     )

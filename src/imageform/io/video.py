@@ -632,7 +632,8 @@ class VideoWriter:
         suffix = p.suffix.lower()
         if suffix not in _CODECS:
             raise InvalidInputError(
-                f"expected a video file name ending in {', '.join(_CODECS)}, got {p.name!r}"
+                f"expected a video file name ending in {', '.join(_CODECS)}, got "
+                f"{describe(p.name, 60)}"
             )
         if not (isinstance(fps, int | float) and math.isfinite(fps) and 0 < fps < 1e4):
             raise InvalidInputError(f"expected fps in (0, 10000), got {describe(fps)}")

@@ -76,6 +76,8 @@ def _check_data_suffix(wf: Workflow, out: Path) -> None:
     after the whole computation. Before anything is read; a folder output is left to
     :func:`_check_folder_name`.
     """
+    from imageform._validate import describe
+
     if wf.output is not None and wf.output.folder:
         return
     if out.suffix.lower() in wf.suffixes:
@@ -83,10 +85,12 @@ def _check_data_suffix(wf: Workflow, out: Path) -> None:
     if set(wf.suffixes) - set(IMAGE_SUFFIXES):
         kinds = " or ".join(wf.suffixes)
         raise InvalidInputError(
-            f"{wf.name} writes a {kinds} file: give -o a {kinds} name, not {out.name!r}"
+            f"{wf.name} writes a {kinds} file: give -o a {kinds} name, not {describe(out.name, 60)}"
         )
     kinds = ", ".join(wf.suffixes[:-1]) + f" or {wf.suffixes[-1]}"
-    raise InvalidInputError(f"{wf.name} writes an image: give -o a {kinds} name, not {out.name!r}")
+    raise InvalidInputError(
+        f"{wf.name} writes an image: give -o a {kinds} name, not {describe(out.name, 60)}"
+    )
 
 
 #: Names of files, never of the folder a folder output (simulate, reconstruct...) writes.

@@ -428,10 +428,12 @@ class CalibrateOptions(_BoardChecks, ImageIn):
 
     def check(self) -> None:
         """Check the board; a ChArUco board needs a ``--marker`` smaller than ``--square``."""
+        from imageform._validate import describe
+
         super().check()
         if self.plot is not None and self.plot.suffix.lower() not in _PLOT_SUFFIXES:
             raise InvalidInputError(
-                f"expected --plot as a .png, .svg or .pdf file, got {self.plot.name!r}"
+                f"expected --plot as a .png, .svg or .pdf file, got {describe(self.plot.name, 60)}"
             )
         charuco = parse_charuco(self.board)
         if charuco is not None and self.partial:
