@@ -43,7 +43,11 @@ TISSUE_MASK_RULES: MappingProxyType[str, str] = MappingProxyType(
         "dark": "black ink, dark folds, debris: luma < dark_luminance (HistoQC's dark "
         "tissue rule), or a neutral OD (max/min over the channels <= 1.5) with mean OD >= 1; "
         "where its region (with the paler rim: luma < 2 dark_luminance, or neutral with mean "
-        "OD >= 0.5) is a stroke or its flags large: the dense DAB of IHC nuclei is a blob",
+        "OD >= 0.5) is a stroke or its flags large: the dense DAB of IHC nuclei is a blob; "
+        "black ink (mostly neutral with mean OD >= 2.5) a stroke from 3.5 times as long as "
+        "wide; a grey region of at most 24 pixels by the glass is a speck of dye. Lengths "
+        "and areas scale with mpp (0.5 um per pixel: as given), a stroke's length with the "
+        "image's shorter side under 512 pixels",
         "he": "H&E slides only (he=True; DAB is brown and hematoxylin + DAB grey): yellow, "
         "orange and brown margin dye and pigment, OD_blue > 1.2 OD_green with OD_blue >= "
         "pen_min_od; grey (label, slide edge, dirt), max/min of the ODs <= 1.25 with mean "
@@ -120,7 +124,9 @@ def tissue_mask(
     Black ink is denser than any stain and neutral: a dark region where at least half the
     flags are neutral with mean OD ≥ 2.8 (HistoQC's black pen over tissue: 3.0-3.4; dense
     DAB, tinted or below 2.6) is a stroke from 3.5 times as long as wide. A dark region of
-    at most 24 pixels with its rim, smaller than a nucleus, is a speck of dye or dirt.
+    at most 24 pixels with its rim (smaller than a nucleus), grey (half its flags by the
+    neutral rule) and within 3 pixels of glass (:math:`\lVert OD\rVert < 0.15`) is a speck
+    of the margin's dye or dirt.
 
     A flag without a flagged neighbour (8-connected) is dropped as speckle, the artefacts
     grow by ``margin`` pixels (4-connected), which takes the stroke's blended rim with it.
@@ -128,10 +134,12 @@ def tissue_mask(
     **Scale.** The shape rules' lengths (24 pixels) and areas (16 384, 1024, 512, 24 and
     4 pixels) are those of a 512-pixel tile at 0.5 µm per pixel (tuned on 224-2000 pixel
     tiles at 0.25-0.5 µm and slide thumbnails). With the pixel size known (``mpp``) the
-    lengths scale by :math:`s = 0.5 / \mathrm{mpp}` and the areas by :math:`s^2`; in any
-    case :math:`s` is at most the image's shorter side over 512 (a stroke across a small
-    crop is cut short by its edges: 0.5 % of a 224-pixel crop is a stroke 31 pixels long)
-    and within [0.25, 8]. A 512-pixel tile without ``mpp`` is judged as before.
+    lengths scale by :math:`s = 0.5 / \mathrm{mpp}` and the areas by :math:`s^2`, with
+    :math:`s` within [0.25, 8]. A stroke's length test is also at most the image's shorter
+    side over 512 times the tile's (a stroke across a small crop is cut short by its edges:
+    0.5 % of a 224-pixel crop is a stroke 31 pixels long; the image's size says nothing of
+    its nuclei's, so widths and areas stay). A 512-pixel tile, or a larger image, without
+    ``mpp`` is scaled as before.
 
     Parameters
     ----------
