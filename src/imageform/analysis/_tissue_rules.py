@@ -306,9 +306,22 @@ def _stroke_like(
     long = _LONG * (scale if cut is None else cut)
     area, length, width = _shape(labels, count)
     straight = (length >= long) & (length >= elongation * width)
-    inside = ndimage.distance_transform_edt(labels > 0)
     radius = np.zeros(count + 1)
-    np.maximum.at(radius, labels[labels > 0], inside[labels > 0])
+    # only a region of at least ``long`` pixels can pass (a stroke's length is at most its
+    # area); regions do not touch, so the distance transform of their box is theirs
+    cand = area >= long
+    cand[0] = False
+    if cand.any():
+        m = cand[labels]
+        rows, cols = np.flatnonzero(m.any(axis=1)), np.flatnonzero(m.any(axis=0))
+        box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+        # the box's sides inside the image border background; the image's own edges do not
+        h, w = labels.shape
+        edge = ((rows[0] == 0, rows[-1] == h - 1), (cols[0] == 0, cols[-1] == w - 1))
+        pad = np.pad(m[box], 1, constant_values=tuple((int(a), int(b)) for a, b in edge))
+        inside = ndimage.distance_transform_edt(pad)[1:-1, 1:-1]
+        lab = labels[box]
+        np.maximum.at(radius, lab[m[box]], inside[m[box]])
     thick = 2.0 * np.maximum(radius, 0.5)
     curved = (area >= long * thick) & (area >= thin * thick * thick)
     out = straight | (curved & (holes <= _HOLES))
