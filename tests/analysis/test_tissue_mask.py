@@ -255,6 +255,54 @@ def test_black_ink_and_dark_fold_are_excluded() -> None:
     assert keep[~band].mean() > 0.99
 
 
+def test_short_black_stroke_on_a_small_crop_is_ink() -> None:
+    """0.5 % of a 224-pixel crop as an 8-pixel wide black stroke: 31 pixels long, too short
+    for the 512-pixel tile's stroke test; the scale and black ink's density find it."""
+    img = _read("torchstain_target_crop.png")[:224, :224]
+    band = _band(img.shape, 0.005)
+    black = _inked(img, band, "black")
+    assert not tissue_mask(black)[band].any()
+    clean = macenko_stains(img, i0=240 / 255, mask=None).stain_matrix
+    assert _worst(macenko_stains(black, i0=240 / 255).stain_matrix, clean) < 1.0
+
+
+def test_pixel_size_scales_the_shape_rules() -> None:
+    """A black bar 40 x 8 pixels is a stroke on a tile at 0.5 um per pixel; at 0.125 um
+    (10 x 2 um) it is the size of a nucleus and kept; a speck of dye by the glass is
+    dropped."""
+    img = np.full((1024, 1024, 3), (0.75, 0.55, 0.7))
+    img[:, :200] = 0.94  # glass
+    img[500:508, 500:540] = 0.03
+    img[200:203, 201:204] = 0.03  # a speck at the tissue's edge: smaller than a nucleus
+    bar = np.zeros(img.shape[:2], dtype=bool)
+    bar[500:508, 500:540] = True
+    assert not tissue_mask(img, i0=0.94).any(where=bar)
+    assert tissue_mask(img, i0=0.94, mpp=0.5)[bar].sum() == 0
+    assert tissue_mask(img, i0=0.94, mpp=0.125)[bar].all()
+    assert not tissue_mask(img, i0=0.94, mpp=0.125)[201, 202]
+    assert not tissue_mask(img, i0=0.94)[201, 202]
+
+
+def test_shape_scale_of_sizes_and_pixel_sizes() -> None:
+    from imageform.analysis._tissue_rules import shape_scale
+
+    assert shape_scale((512, 512)) == (1.0, 1.0) == shape_scale((2000, 1440))
+    assert shape_scale((224, 224)) == pytest.approx((1.0, 224 / 512))  # a stroke's length
+    assert shape_scale((2048, 4096), 0.25) == (2.0, 2.0)
+    assert shape_scale((512, 512), 0.25) == (2.0, 1.0)
+    assert shape_scale((4000, 4000), 16.0) == (0.25, 0.25)  # a thumbnail: at least a quarter
+    assert shape_scale((32, 32)) == (1.0, 0.25)
+
+
+def test_masks_agree_with_dask_on_a_small_image() -> None:
+    """The scale is the whole image's, not a block's."""
+    da = pytest.importorskip("dask.array")
+    img = _read("torchstain_target_crop.png")[:224, :224]
+    black = _inked(img, _band(img.shape, 0.005), "black")
+    lazy = tissue_mask(da.from_array(black, chunks=(112, 112, 3)))
+    assert np.array_equal(np.asarray(lazy.compute()), tissue_mask(black))
+
+
 @pytest.mark.parametrize("name", ["torchstain_target_crop.png", "tiatoolbox_colon_crop.png"])
 def test_clean_tiles_keep_their_tissue_and_stains(name: str) -> None:
     img = _read(name)
@@ -347,6 +395,7 @@ def test_stain_mixtures_are_never_pen(ref: int, c1: float, c2: float) -> None:
         ({"image": np.zeros((4, 4, 3)), "dark_luminance": 2.0}, "dark_luminance"),
         ({"image": np.zeros((4, 4, 3)), "beta": -1.0}, "beta"),
         ({"image": np.zeros((4, 4, 3)), "i0": 2.0}, "i0"),
+        ({"image": np.zeros((4, 4, 3)), "mpp": 0.0}, "mpp"),
     ],
 )
 def test_tissue_mask_bad_input(kwargs: dict[str, Any], match: str) -> None:
@@ -486,3 +535,43 @@ def test_lattice_rows_keeps_the_smallest_keys() -> None:
     fewer = np.delete(where, picked[0])  # one of the picked pixels left out
     again = fewer[lattice_rows(fewer, 100)]
     assert len(set(where[picked].tolist()) & set(again.tolist())) == 99
+
+
+def test_pixel_size_of_microscopy_tiffs(tmp_path: Path) -> None:
+    tifffile = pytest.importorskip("tifffile")
+    from imageform.io import pixel_size
+
+    px = np.zeros((4, 4, 3), np.uint8)
+    ome = tmp_path / "s.ome.tif"
+    tifffile.imwrite(
+        ome,
+        px,
+        metadata={"PhysicalSizeX": 0.5, "PhysicalSizeY": 0.5, "PhysicalSizeXUnit": "µm"},
+    )
+    assert pixel_size(ome) == (0.5, 0.5)
+    svs = tmp_path / "s.tif"
+    tifffile.imwrite(svs, px, description="Aperio Image Library v12\n4 x 4 |MPP = 0.2527|")
+    assert pixel_size(svs) == (0.2527, 0.2527)
+    plain = tmp_path / "p.tif"
+    tifffile.imwrite(plain, px, resolution=(72, 72))  # photo software's 72 dpi: not read
+    assert pixel_size(plain) is None
+    iio = pytest.importorskip("imageio.v3")
+    iio.imwrite(tmp_path / "p.png", px)
+    assert pixel_size(tmp_path / "p.png") is None
+    with pytest.raises(InvalidInputError, match="does not exist"):
+        pixel_size(tmp_path / "none.tif")
+
+
+def test_stain_normalize_passes_the_files_pixel_size(tmp_path: Path) -> None:
+    """An OME TIFF at 0.125 um per pixel: a 40 x 8 black bar is nucleus-sized, kept."""
+    tifffile = pytest.importorskip("tifffile")
+    from imageform.workflows.analysis import StainNormalizeOptions, _stain_mask
+
+    img = np.full((1024, 1024, 3), (0.75, 0.55, 0.7))
+    img[500:508, 500:540] = 0.03
+    img8 = np.round(img * 255).astype(np.uint8)
+    fine = tmp_path / "fine.ome.tif"
+    tifffile.imwrite(fine, img8, metadata={"PhysicalSizeX": 0.125, "PhysicalSizeY": 0.125})
+    opts = StainNormalizeOptions(target=fine)
+    assert _stain_mask(opts, img8, path=fine)[504, 520]
+    assert _stain_mask(opts, img8) == "auto"  # no file: the estimator's own mask

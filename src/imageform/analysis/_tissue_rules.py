@@ -102,6 +102,39 @@ _SOLID_SHARE = 0.85
 _SOLID_AREA = 512
 _LINE_REACH = 3
 
+#: The scale of the shape rules. Their lengths (_LONG, _LINE_REACH) and areas (_LARGE,
+#: _GREEN_AREA, _SOLID_AREA, _HOLE_AREA, _SPECK) are those of a 512-pixel tile at
+#: _REF_MPP micrometres per pixel (the tuning tiles: 0.25-0.5 um; Kather's 0.5), and scale
+#: with the pixel size when it is known (``mpp``: lengths by _REF_MPP / mpp, areas by its
+#: square), within _MIN_SCALE (a thumbnail's) and _MAX_SCALE of them. A stroke's length
+#: alone is also at most that of an image whose shorter side is _REF_SIDE: a stroke across
+#: a 224-pixel crop is cut by its edges (0.5 % of it as an 8-pixel wide stroke is 31 pixels
+#: long); the image's size says nothing of its nuclei's (their widths and areas stay).
+_REF_MPP = 0.5
+_REF_SIDE = 512
+_MIN_SCALE = 0.25
+_MAX_SCALE = 8.0
+
+#: Black ink is denser than any stain and neutral: a dark region where at least half the
+#: dark flags are neutral (max/min OD <= 1.5) with mean OD >= _INK_OD (HistoQC's black
+#: pen over tissue: a median 3.0-3.4; dense DAB nuclei, tinted, max/min 1.6-3.4; the
+#: densest neutral DAB of the tuning tiles: a median 2.56) is a straight stroke from
+#: _INK_ELONGATION times as long as wide (a short stroke on a small crop: 3.9).
+_INK_OD = 2.5
+_INK_ELONGATION = 3.5
+
+#: A dark region (with its rim) of at most _SPECK pixels, smaller than a nucleus (5 um
+#: across: about 80 pixels at 0.5 um), grey (at least half its dark flags by the neutral
+#: rule) and within _SPECK_REACH pixels of glass (||OD|| < _SPECK_GLASS) is a speck of the
+#: margin's dye or dirt, not stain. HistoQC's green-marked thumbnail: its margin's grey
+#: specks (6-53 pixels) turned Macenko by 15 deg when kept; 24, 40 and 64 all take that
+#: back (13.9-14.4 deg), 24 drops least of the tuning tiles; without the glass the speck
+#: rule dropped up to 0.35 % of the tuning tiles (grey DAB dots inside the tissue), without
+#: grey the blue-black dots of the torchstain crop by its glass (Vahadane moved 6.6 deg).
+_SPECK = 24
+_SPECK_REACH = 3
+_SPECK_GLASS = 0.15
+
 #: Green ink flags with OD_G below this times OD_R are ink wherever they are (HistoQC's
 #: green marker: median 0.28, 95th percentile 0.44; no stain of the tuning tiles below
 #: 0.47 at its 1st percentile).
@@ -140,7 +173,7 @@ def _flags(rgb: np.ndarray, od: np.ndarray, p: dict[str, Any]) -> dict[str, np.n
     """Per-pixel flags of one block by rule: pen (with its green-ink part), dark, he, weak."""
     r, g, b = od[..., 0], od[..., 1], od[..., 2]
     shape = rgb.shape[:-1]
-    keys = ("pen", "green", "deep", "dark", "near", "he", "weak")
+    keys = ("pen", "green", "deep", "dark", "near", "grey", "inky", "he", "weak", "glass")
     out = {k: np.zeros(shape, dtype=bool) for k in keys}
     if p["pen"]:
         strong = r >= p["pen_min_od"]
@@ -151,18 +184,24 @@ def _flags(rgb: np.ndarray, od: np.ndarray, p: dict[str, Any]) -> dict[str, np.n
         out["pen"] = strong & (green | blue)
         # ink over tissue; the pen flags are in it (OD_G < 0.5 OD_R implies OD_G < OD_R)
         out["weak"] = strong & ((g < _WEAK_RATIO * r) | ((b < _WEAK_BLUE * r) & (g < 0.9 * r)))
+    out["glass"] = r * r + g * g + b * b < _SPECK_GLASS * _SPECK_GLASS
+    if p.get("he", False) or p["dark"]:
+        # over the channels once, channel by channel (a reduction over a last axis of 3 is slow)
+        lo = np.maximum(np.minimum(np.minimum(r, g), b), 1e-6)
+        hi = np.maximum(np.maximum(r, g), b)
+        mean = (r + g + b) / 3.0
     if p.get("he", False):
-        lo = np.maximum(od.min(axis=-1), 1e-6)
-        grey = (od.max(axis=-1) <= _GREY_RATIO * lo) & (od.mean(axis=-1) >= _GREY_OD)
+        grey = (hi <= _GREY_RATIO * lo) & (mean >= _GREY_OD)
         out["he"] = ((b > _BROWN_RATIO * g) & (b >= p["pen_min_od"])) | grey
     if p["dark"]:
-        luma = rgb @ _LUMA
-        lo = np.maximum(od.min(axis=-1), 1e-6)
-        neutral = (od.max(axis=-1) <= _NEUTRAL_RATIO * lo) & (od.mean(axis=-1) >= _NEUTRAL_OD)
-        out["dark"] = (luma < p["dark_luminance"]) | neutral
+        luma = rgb[..., 0] * _LUMA[0] + rgb[..., 1] * _LUMA[1] + rgb[..., 2] * _LUMA[2]
+        neutral = hi <= _NEUTRAL_RATIO * lo
+        out["grey"] = neutral & (mean >= _NEUTRAL_OD)
+        out["dark"] = (luma < p["dark_luminance"]) | out["grey"]
         # the dark rule's rim: its region (a stroke of black ink with its paler edge)
-        near = (od.max(axis=-1) <= _NEUTRAL_RATIO * lo) & (od.mean(axis=-1) >= _NEAR_OD)
-        out["near"] = (luma < _NEAR_LUMA * p["dark_luminance"]) | near
+        out["near"] = (luma < _NEAR_LUMA * p["dark_luminance"]) | (neutral & (mean >= _NEAR_OD))
+        # black ink: dense and neutral (its region's median below, :func:`_kept`)
+        out["inky"] = neutral & (mean >= _INK_OD)
     return out
 
 
@@ -221,7 +260,7 @@ def _regions(mask: np.ndarray, structure: np.ndarray) -> tuple[np.ndarray, int]:
     return labels, int(count)
 
 
-def _holes(joined: np.ndarray, count: int) -> np.ndarray:
+def _holes(joined: np.ndarray, count: int, scale: float = 1.0) -> np.ndarray:
     """Per label of ``joined`` (0..count): its holes of at least ``_HOLE_AREA`` pixels."""
     from scipy import ndimage
 
@@ -233,9 +272,10 @@ def _holes(joined: np.ndarray, count: int) -> np.ndarray:
     hl, hc = ndimage.label(holes)
     area = np.bincount(hl.reshape(-1), minlength=hc + 1)
     around = ndimage.grey_dilation(joined, size=(3, 3))
-    owner = np.asarray(ndimage.maximum(around, hl, index=np.arange(1, hc + 1)), dtype=np.int64)
-    big = area[1:] >= _HOLE_AREA
-    np.add.at(out, owner[big], 1)
+    owner = np.zeros(hc + 1, dtype=np.int64)
+    np.maximum.at(owner, hl[hl > 0], around[hl > 0])
+    big = area[1:] >= max(1.0, _HOLE_AREA * scale * scale)
+    np.add.at(out, owner[1:][big], 1)
     return out
 
 
@@ -246,6 +286,9 @@ def _stroke_like(
     thin: float,
     holes: np.ndarray,
     large: bool = True,
+    scale: float = 1.0,
+    elongation: float | np.ndarray = _ELONGATION,
+    cut: float | None = None,
 ) -> np.ndarray:
     """Per label: a long, thin region (a stroke, straight or curved, a ring) or a large one.
 
@@ -255,23 +298,42 @@ def _stroke_like(
     ``_HOLES`` holes (``holes``, per label): a curved stroke is a line, touching nuclei
     and cells make a net (thin by that measure too, but not straight).
     Large: ``_LARGE`` pixels and ``_LARGE_SHARE`` of the image, at least ``_LONG`` thick.
+    Lengths scale by ``scale``, areas by its square (:data:`_REF_MPP`); a stroke's length
+    by ``cut`` (at most ``scale``: the image's size, :func:`shape_scale`).
     """
     from scipy import ndimage
 
+    long = _LONG * (scale if cut is None else cut)
     area, length, width = _shape(labels, count)
-    straight = (length >= _LONG) & (length >= _ELONGATION * width)
-    inside = ndimage.distance_transform_edt(labels > 0)
+    straight = (length >= long) & (length >= elongation * width)
     radius = np.zeros(count + 1)
-    radius[1:] = ndimage.maximum(inside, labels, index=np.arange(1, count + 1))
+    # only a region of at least ``long`` pixels can pass (a stroke's length is at most its
+    # area); regions do not touch, so the distance transform of their box is theirs
+    cand = area >= long
+    cand[0] = False
+    if cand.any():
+        m = cand[labels]
+        rows, cols = np.flatnonzero(m.any(axis=1)), np.flatnonzero(m.any(axis=0))
+        box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+        # the box's sides inside the image border background; the image's own edges do not
+        h, w = labels.shape
+        edge = ((rows[0] == 0, rows[-1] == h - 1), (cols[0] == 0, cols[-1] == w - 1))
+        pad = np.pad(m[box], 1, constant_values=tuple((int(a), int(b)) for a, b in edge))
+        inside = ndimage.distance_transform_edt(pad)[1:-1, 1:-1]
+        lab = labels[box]
+        np.maximum.at(radius, lab[m[box]], inside[m[box]])
     thick = 2.0 * np.maximum(radius, 0.5)
-    curved = (area >= _LONG * thick) & (area >= thin * thick * thick)
+    curved = (area >= long * thick) & (area >= thin * thick * thick)
     out = straight | (curved & (holes <= _HOLES))
     if large:
-        out |= (area >= max(_LARGE, _LARGE_SHARE * n_image)) & (thick >= _LONG)
+        big = area >= max(_LARGE * scale * scale, _LARGE_SHARE * n_image)
+        out |= big & (thick >= _LONG * scale)
     return out
 
 
-def _grow(flags: dict[str, np.ndarray], margin: int) -> np.ndarray:
+def _grow(
+    flags: dict[str, np.ndarray], margin: int, scale: float = 1.0, cut: float = 1.0
+) -> np.ndarray:
     """Return the artefacts: flags cleaned, judged by their regions' shapes, dilated.
 
     Flags without a flagged 8-neighbour are dropped (speckle). The pen flags and the ink
@@ -296,7 +358,8 @@ def _grow(flags: dict[str, np.ndarray], margin: int) -> np.ndarray:
     core = clean & flags["he"]
     n_image = bad.shape[-1] * bad.shape[-2]
     for idx in np.ndindex(bad.shape[:-2]):
-        core[idx] |= _kept({k: v[idx] for k, v in flags.items()}, clean[idx], n_image)
+        one = {k: v[idx] for k, v in flags.items()}
+        core[idx] |= _kept(one, clean[idx], n_image, scale, cut)
     weak = flags["weak"]
     if weak.any() and core.any():
         core |= _stroke(core & weak, weak | core)
@@ -305,7 +368,13 @@ def _grow(flags: dict[str, np.ndarray], margin: int) -> np.ndarray:
     return ndimage.binary_dilation(core, structure=cross, iterations=margin)
 
 
-def _kept(flags: dict[str, np.ndarray], clean: np.ndarray, n_image: int) -> np.ndarray:
+def _kept(
+    flags: dict[str, np.ndarray],
+    clean: np.ndarray,
+    n_image: int,
+    scale: float = 1.0,
+    cut: float = 1.0,
+) -> np.ndarray:
     """Return the pen regions that are ink and the dark flags that are artefacts (2-D)."""
     out = np.zeros(clean.shape, dtype=bool)
     # the seeds: pen flags, and dark flags in ink over tissue (dense ink over tissue is dark)
@@ -321,12 +390,13 @@ def _kept(flags: dict[str, np.ndarray], clean: np.ndarray, n_image: int) -> np.n
         size = np.bincount(labels.reshape(-1), minlength=count + 1)
         share = np.bincount(labels[pen], minlength=count + 1) / np.maximum(size, 1)
         green = np.bincount(labels[pen & flags["green"]], minlength=count + 1)
-        holes = _holes(whole, count)
+        holes = _holes(whole, count, scale)
         ok = share >= _GROW_SHARE
+        s2 = scale * scale
         ok &= (
-            _stroke_like(labels, count, n_image, _THIN, holes)
-            | ((green >= _GREEN_SHARE * size) & (size >= _GREEN_AREA))
-            | ((share >= _SOLID_SHARE) & (size >= _SOLID_AREA) & (holes == 0))
+            _stroke_like(labels, count, n_image, _THIN, holes, scale=scale, cut=cut)
+            | ((green >= _GREEN_SHARE * size) & (size >= _GREEN_AREA * s2))
+            | ((share >= _SOLID_SHARE) & (size >= _SOLID_AREA * s2) & (holes == 0))
         )
         ok[0] = False
         out |= ok[labels] | (pen & flags["deep"])
@@ -334,18 +404,38 @@ def _kept(flags: dict[str, np.ndarray], clean: np.ndarray, n_image: int) -> np.n
         # across two pixels, make a straight stroke; it goes with the ink over tissue around it
         fl, fc = _regions(ndimage.binary_dilation(pen, np.ones((5, 5), dtype=bool)), _cross(2))
         area, length, width = _shape(fl, fc)
-        line = (length >= _LONG) & (length >= _ELONGATION * width) & (area >= _LONG * _LONG / 4)
+        long = _LONG * cut
+        line = (length >= long) & (length >= _ELONGATION * width) & (area >= long * long / 4)
         line[0] = False
         if line.any():
-            near = ndimage.binary_dilation(line[fl], _cross(2), iterations=_LINE_REACH)
+            reach = max(1, round(_LINE_REACH * scale))
+            near = ndimage.binary_dilation(line[fl], _cross(2), iterations=reach)
             out |= near & weak
     dark = clean & flags["dark"]
     if dark.any():
         labels, count = _regions(dark | flags["near"], np.ones((3, 3), dtype=bool))
-        # no hole test: a fold or a stroke of black ink holds paler pixels
-        ok = _stroke_like(labels, count, n_image, _THIN_DARK, np.zeros(count + 1), large=False)
         size = np.bincount(labels[dark], minlength=count + 1)
-        ok |= (size >= max(_LARGE, _LARGE_SHARE * n_image)) | (size >= n_image / 2)
+        # black ink, dense and neutral: a stroke from a lower elongation
+        inky = np.bincount(labels[dark & flags["inky"]], minlength=count + 1) >= size / 2
+        elong = np.where(inky & (size > 0), _INK_ELONGATION, _ELONGATION)
+        # no hole test: a fold or a stroke of black ink holds paler pixels
+        ok = _stroke_like(
+            labels, count, n_image, _THIN_DARK, np.zeros(count + 1), False, scale, elong, cut
+        )
+        s2 = scale * scale
+        ok |= (size >= max(_LARGE * s2, _LARGE_SHARE * n_image)) | (size >= n_image / 2)
+        area = np.bincount(labels.reshape(-1), minlength=count + 1)
+        # smaller than a nucleus and grey: a speck of dye or dirt ...
+        grey = 2 * np.bincount(labels[dark & flags["grey"]], minlength=count + 1) >= size
+        speck = (area <= _SPECK * s2) & grey & (size > 0)
+        if speck[1:].any() and flags["glass"].any():  # ... by the glass (the margin's dye)
+            from scipy import ndimage
+
+            reach = max(1, round(_SPECK_REACH * scale))
+            by = ndimage.binary_dilation(flags["glass"], _cross(2), iterations=reach)
+            speck &= np.bincount(labels[by], minlength=count + 1) > 0
+            ok |= speck
+
         ok[0] = False
         out |= dark & ok[labels]
     return out
@@ -374,10 +464,24 @@ def _block(
     rgb: np.ndarray, log_i0: np.ndarray, p: dict[str, Any], glass: bool, beta: float
 ) -> np.ndarray:
     od = _od(rgb, log_i0)
-    keep = ~_grow(_flags(rgb, od, p), p["margin"])
+    keep = ~_grow(_flags(rgb, od, p), p["margin"], *p["scale"])
     if glass:
-        keep &= (od * od).sum(axis=-1) >= beta * beta
+        r, g, b = od[..., 0], od[..., 1], od[..., 2]
+        keep &= r * r + g * g + b * b >= beta * beta
     return keep
+
+
+def shape_scale(size: tuple[int, ...], mpp: float | None = None) -> tuple[float, float]:
+    """Return the shape rules' scales for an image of ``size`` (H, W) and pixel size ``mpp``.
+
+    (scale, cut): ``scale`` = ``_REF_MPP / mpp`` (1 when the pixel size is not known) for
+    every length and area; ``cut``, for a stroke's length alone, at most the shorter side
+    over ``_REF_SIDE`` too (an image's size says how long a stroke across it can be, not
+    how large its nuclei are); both within [``_MIN_SCALE``, ``_MAX_SCALE``].
+    """
+    by_size = min(int(size[0]), int(size[1])) / _REF_SIDE
+    scale = min(max(1.0 if mpp is None else _REF_MPP / float(mpp), _MIN_SCALE), _MAX_SCALE)
+    return float(scale), float(max(min(scale, by_size), _MIN_SCALE))
 
 
 #: The defaults of :func:`imageform.analysis.tissue_mask`'s thresholds.
@@ -388,16 +492,20 @@ DEFAULTS: dict[str, Any] = {
     "pen_min_od": 0.3,
     "dark_luminance": _DARK_LUMA,
     "margin": 1,
+    "mpp": None,
 }
 
 
 def keep_mask(rgb: Any, i0v: np.ndarray, params: dict[str, Any], glass: bool, beta: float) -> Any:
     """Return the tissue mask of an image (NumPy or Dask) with a resolved I0."""
     log_i0 = np.log(i0v)
+    # the whole image's scale (a Dask block's size is not the image's)
+    scale = shape_scale(tuple(int(v) for v in rgb.shape[-3:-1]), params.get("mpp"))
+    params = {**params, "scale": scale}
     if not is_dask(rgb):
         return _block(np.asarray(rgb), log_i0, params, glass, beta)
     reach = params["margin"] + 1 + (_STROKE_RADIUS + _STROKE_REACH if params["pen"] else 0)
-    reach += int(2 * _LONG)  # the regions' shapes: read over a stroke's length
+    reach += int(2 * _LONG * max(scale[0], 1.0))  # the regions' shapes: a stroke's length
     depth = {ax: min(reach, int(rgb.shape[ax])) for ax in (rgb.ndim - 3, rgb.ndim - 2)}
     whole = rgb.rechunk({rgb.ndim - 1: 3})
 

@@ -43,7 +43,11 @@ TISSUE_MASK_RULES: MappingProxyType[str, str] = MappingProxyType(
         "dark": "black ink, dark folds, debris: luma < dark_luminance (HistoQC's dark "
         "tissue rule), or a neutral OD (max/min over the channels <= 1.5) with mean OD >= 1; "
         "where its region (with the paler rim: luma < 2 dark_luminance, or neutral with mean "
-        "OD >= 0.5) is a stroke or its flags large: the dense DAB of IHC nuclei is a blob",
+        "OD >= 0.5) is a stroke or its flags large: the dense DAB of IHC nuclei is a blob; "
+        "black ink (mostly neutral with mean OD >= 2.5) a stroke from 3.5 times as long as "
+        "wide; a grey region of at most 24 pixels by the glass is a speck of dye. Lengths "
+        "and areas scale with mpp (0.5 um per pixel: as given), a stroke's length with the "
+        "image's shorter side under 512 pixels",
         "he": "H&E slides only (he=True; DAB is brown and hematoxylin + DAB grey): yellow, "
         "orange and brown margin dye and pigment, OD_blue > 1.2 OD_green with OD_blue >= "
         "pen_min_od; grey (label, slide edge, dirt), max/min of the ODs <= 1.25 with mean "
@@ -64,6 +68,7 @@ def tissue_mask(
     pen_min_od: float = 0.3,
     dark_luminance: float = 0.08,
     margin: int = 1,
+    mpp: float | None = None,
 ) -> Array:
     r"""Pixels of stained tissue: True where a pixel is neither glass nor an artefact.
 
@@ -116,10 +121,25 @@ def tissue_mask(
       grey (a label, the slide's edge, dirt): :math:`\max_c OD_c \le 1.25 \min_c OD_c`
       with mean OD ≥ 0.3. DAB is brown and hematoxylin + DAB grey: off for IHC.
 
+    Black ink is denser than any stain and neutral: a dark region where at least half the
+    flags are neutral with mean OD ≥ 2.8 (HistoQC's black pen over tissue: 3.0-3.4; dense
+    DAB, tinted or below 2.6) is a stroke from 3.5 times as long as wide. A dark region of
+    at most 24 pixels with its rim (smaller than a nucleus), grey (half its flags by the
+    neutral rule) and within 3 pixels of glass (:math:`\lVert OD\rVert < 0.15`) is a speck
+    of the margin's dye or dirt.
+
     A flag without a flagged neighbour (8-connected) is dropped as speckle, the artefacts
     grow by ``margin`` pixels (4-connected), which takes the stroke's blended rim with it.
-    The shape rules are in pixels, tuned on 224-2000 pixel tiles at 0.25-0.5 µm per pixel
-    and slide thumbnails.
+
+    **Scale.** The shape rules' lengths (24 pixels) and areas (16 384, 1024, 512, 24 and
+    4 pixels) are those of a 512-pixel tile at 0.5 µm per pixel (tuned on 224-2000 pixel
+    tiles at 0.25-0.5 µm and slide thumbnails). With the pixel size known (``mpp``) the
+    lengths scale by :math:`s = 0.5 / \mathrm{mpp}` and the areas by :math:`s^2`, with
+    :math:`s` within [0.25, 8]. A stroke's length test is also at most the image's shorter
+    side over 512 times the tile's (a stroke across a small crop is cut short by its edges:
+    0.5 % of a 224-pixel crop is a stroke 31 pixels long; the image's size says nothing of
+    its nuclei's, so widths and areas stay). A 512-pixel tile, or a larger image, without
+    ``mpp`` is scaled as before.
 
     Parameters
     ----------
@@ -141,6 +161,10 @@ def tissue_mask(
         Luma below which a pixel is dark, in [0, 1].
     margin : int
         Pixels the artefact flags grow by, in [0, 64].
+    mpp : float, optional
+        Pixel size in micrometres (µm per pixel, > 0), when known: the TIFF readers of
+        :mod:`imageform.batch` give it (OME ``PhysicalSizeX``, Aperio ``MPP``) and
+        ``imageform stain`` passes it on. None: the image's size alone sets the scale.
 
     Returns
     -------
@@ -168,6 +192,16 @@ def tissue_mask(
     >>> m = tissue_mask(tile, i0=0.94, margin=0)
     >>> int(m.sum()), bool(m[15, 15]), bool(m[32, 30]), bool(m[5, 30]), bool(m[0, 0])
     (816, True, False, False, False)
+
+    A short black stroke on a small crop (0.5 % of it) and a dense brown DAB nucleus of the
+    same size beside it: the stroke is ink, the nucleus stain.
+
+    >>> crop = np.full((224, 224, 3), (0.75, 0.55, 0.7))    # H&E
+    >>> crop[100:108, 40:71] = (0.03, 0.03, 0.03)            # black ink, 31 x 8
+    >>> crop[60:75, 150:165] = (0.16, 0.06, 0.04)            # dense DAB, 15 x 15
+    >>> m = tissue_mask(crop, i0=0.94, margin=0)
+    >>> bool(m[104, 55]), bool(m[67, 157]), bool(m[20, 20])
+    (False, True, True)
     """
     rgb = image_in(image, nonempty=True)
     if rgb.ndim < 3:
@@ -187,5 +221,6 @@ def tissue_mask(
         "pen_min_od": as_real(pen_min_od, "pen_min_od", minimum=0.0, maximum=10.0),
         "dark_luminance": as_real(dark_luminance, "dark_luminance", minimum=0.0, maximum=1.0),
         "margin": as_int(margin, "margin", minimum=0, maximum=64),
+        "mpp": None if mpp is None else as_real(mpp, "mpp", minimum=1e-3, maximum=1e4),
     }
     return keep_mask(rgb, _resolve_i0(rgb, i0), params, flags["glass"], float(beta))

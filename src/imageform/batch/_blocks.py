@@ -105,7 +105,8 @@ def _stain_stats(
     at most ``budget`` pixels, read whole, as whole-slide tools estimate on a thumbnail) or a
     regular subsample of level 0 of at most that many pixels (every ``step``-th row and
     column, read block by block: every tile of level 0 is decoded once). ``budget`` is
-    :data:`imageform.batch.chunked.STAIN_SAMPLE_PIXELS`, read when the run starts.
+    :data:`imageform.batch.chunked.STAIN_SAMPLE_PIXELS`, read when the run starts. Macenko's
+    tissue mask is told the sample's pixel size when the TIFF states level 0's (OME, Aperio).
     """
     from imageform import analysis
     from imageform.io import read_image
@@ -121,6 +122,15 @@ def _stain_stats(
         ref = read_image(target)
         stats_t = measure(ref[..., :3] if ref.ndim == 3 else ref)
     levels = meta.levels if meta is not None else ()
+    microns = meta.microns if meta is not None else None
+
+    def own(img: Any, reduced: float) -> Any:
+        """Measure the slide's statistics on ``img``, ``reduced`` times coarser than level 0."""
+        if method != "macenko" or microns is None:
+            return measure(img)
+        mpp = float(np.sqrt(microns[0] * microns[1])) * reduced
+        return measure(img, mask=analysis.tissue_mask(img, glass=False, mpp=mpp))
+
     if stats_from == "level" and len(levels) < 2:
         raise InvalidInputError(
             f"--stats-from level needs a pyramidal TIFF input; {src} has one level"
@@ -135,9 +145,9 @@ def _stain_stats(
         with tifffile.TiffFile(src) as tf:
             level = tf.series[0].levels[k].asarray()
         where = f"pyramid level {k} ({w} x {h})" + (f", every {step}th pixel" if step > 1 else "")
-        return stats_t, measure(level[::step, ::step]), where
+        return stats_t, own(level[::step, ::step], levels[0][1] / w * step), where
     h, w = int(x.shape[0]), int(x.shape[1])
     step = max(1, int(np.ceil(np.sqrt(h * w / budget))))
     sample = np.asarray(x[::step, ::step].compute())
     where = "level 0" + (f", every {step}th row and column" if step > 1 else ", every pixel")
-    return stats_t, measure(sample), where
+    return stats_t, own(sample, float(step)), where

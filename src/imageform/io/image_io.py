@@ -94,6 +94,7 @@ __all__ = [
     "image_format",
     "image_info",
     "max_pixels",
+    "pixel_size",
     "read_dicom",
     "read_image",
     "write_image",
@@ -395,6 +396,52 @@ def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
         channels, dtype = 3, "uint8" if eight else "uint16"
     info = ImageInfo(width, height, channels, dtype, "tiff")
     return series, info
+
+
+def pixel_size(path: str | Path) -> tuple[float, float] | None:
+    r"""Return the pixel size in micrometres (x, y) a microscopy TIFF states, or None.
+
+    A slide scanner's TIFF states it in its description: OME-XML ``PhysicalSizeX`` /
+    ``PhysicalSizeY`` in µm (Bio-Formats, QuPath's exports), or an Aperio SVS header's
+    ``MPP = ...`` (the same tags :mod:`imageform.batch` reads for its pyramids). The TIFF
+    resolution tags alone are not read: photo software writes 72 dpi to any file. Other
+    formats: None.
+
+    Raises
+    ------
+    InvalidInputError
+        The file is missing.
+
+    Examples
+    --------
+    >>> import tifffile
+    >>> p = getfixture("tmp_path") / "s.ome.tif"
+    >>> tifffile.imwrite(p, np.zeros((4, 4, 3), np.uint8), metadata={"PhysicalSizeX": 0.25,
+    ...     "PhysicalSizeY": 0.25, "PhysicalSizeXUnit": "µm", "PhysicalSizeYUnit": "µm"})
+    >>> pixel_size(p)
+    (0.25, 0.25)
+    """
+    import re
+
+    p = _existing(path)
+    if _content_format(p, "") != "tiff":
+        return None
+    tifffile = _tifffile()
+    try:
+        with tifffile.TiffFile(p) as tif:
+            desc = tif.pages[0].description or ""
+    except Exception:
+        return None
+    if "Aperio" in desc[:200]:
+        m = re.search(r"\bMPP\s*=\s*([0-9.eE+-]+)", desc)
+        return (float(m.group(1)),) * 2 if m else None
+    xs = re.search(r'PhysicalSizeX="([0-9.eE+-]+)"', desc)
+    ys = re.search(r'PhysicalSizeY="([0-9.eE+-]+)"', desc)
+    units = re.findall(r'PhysicalSize[XY]Unit="([^"]*)"', desc)
+    if not xs or any(u not in ("µm", "um", "\u00b5m") for u in units):
+        return None
+    x = float(xs.group(1))
+    return x, float(ys.group(1)) if ys else x
 
 
 def image_info(path: str | Path) -> ImageInfo:

@@ -227,11 +227,18 @@ class StainNormalizeOptions(ImageIn, ImageOut, RgbFrom):
 _MASK_WORDS = ("auto", "he", "none")
 
 
-def _stain_mask(opts: StainNormalizeOptions, img: Any, *, target: bool = False) -> Any:
-    """Return what ``--mask`` means for one image: a keyword (Macenko) or booleans."""
+def _stain_mask(
+    opts: StainNormalizeOptions, img: Any, *, target: bool = False, path: Path | None = None
+) -> Any:
+    """Return what ``--mask`` means for one image: a keyword (Macenko) or booleans.
+
+    ``auto`` and ``he`` on a file that states its pixel size (``path``; OME or Aperio TIFF):
+    :func:`~imageform.analysis.tissue_mask` with that ``mpp``, as booleans.
+    """
     import numpy as np
 
     from imageform import analysis
+    from imageform.io import pixel_size
 
     key = opts.mask or ("auto" if opts.method == "macenko" else "none")
     if key not in _MASK_WORDS:
@@ -246,9 +253,15 @@ def _stain_mask(opts: StainNormalizeOptions, img: Any, *, target: bool = False) 
                     f"{img.shape[0]}, got {m.shape[-1]} x {m.shape[0]}"
                 )
             return m
-    if opts.method == "macenko" or key == "none":
-        return None if key == "none" else key
-    return analysis.tissue_mask(img, he=key == "he")
+    if key == "none":
+        return None
+    size = pixel_size(path) if path is not None else None
+    mpp = None if size is None else float(np.sqrt(size[0] * size[1]))
+    if opts.method == "macenko":  # the estimator's own I0 and no glass rule, as mask="auto"
+        return (
+            key if mpp is None else analysis.tissue_mask(img, glass=False, he=key == "he", mpp=mpp)
+        )
+    return analysis.tissue_mask(img, he=key == "he", mpp=mpp)
 
 
 def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
@@ -268,7 +281,7 @@ def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
                 f"--method {other}, or give the reference image for --method {opts.method}"
             ) from None
     ref = _srgb(run, opts.target, opts, clip=True)[1]
-    mask = _stain_mask(opts, ref, target=True)
+    mask = _stain_mask(opts, ref, target=True, path=opts.target)
     if opts.method == "macenko":
         return analysis.macenko_stains(ref, mask=mask)
     return analysis.reinhard_stats(ref, mask)
@@ -282,7 +295,7 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
 
     read_as, img, space = _srgb(run, image, opts, clip=True)
     stats = _stain_target(run, opts)
-    mask = _stain_mask(opts, img)
+    mask = _stain_mask(opts, img, path=image)
     source = analysis.macenko_stains(img, mask=mask) if opts.method == "macenko" else None
     if source is not None:
         result = analysis.macenko_normalize(img, stats, source=source)
