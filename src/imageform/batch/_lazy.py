@@ -128,7 +128,7 @@ class _DecodedOnce:
         r0, r1, rstep = key[0].indices(self.shape[0])
         c0, c1, cstep = key[1].indices(self.shape[1])
         r1, c1 = max(r1, r0), max(c1, c0)
-        out = np.empty((r1 - r0, c1 - c0, *self.shape[2:]), dtype=self.stored)
+        out = np.empty((r1 - r0, c1 - c0, *self.shape[2:]), dtype=self.dtype)
         ch, cw = self.cell
         for i in range(r0 // ch, -(-r1 // ch)):
             for j in range(c0 // cw, -(-c1 // cw)):
@@ -187,7 +187,7 @@ def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any, opened: list[Any] | None
             and page.compression == 1
             and page.planarconfig == 1
             and page.is_contiguous
-            and page.bitspersample == 8 * page.dtype.itemsize  # not 12 bits packed
+            and page.bitspersample == 8 * np.dtype(page.dtype).itemsize  # not 12-bit packed
             and len(tf.series[0].levels) == 1
         )
         if strips:
