@@ -302,11 +302,18 @@ def batch_rows(folder: Path, rows: list[dict[str, Any]]) -> list[dict[str, Any]]
     said = {(r["file"], r["cls"]): r for r in rows}
     with tempfile.TemporaryDirectory(prefix="walk-batch-") as tmp_s:
         tmp = Path(tmp_s)
-        own_tmp, out = tmp / "tmp", tmp / "out"
+        own_tmp, out, staged = tmp / "tmp", tmp / "out", tmp / "in"
         own_tmp.mkdir()
+        staged.mkdir()
+        # a link per file, its name's dots but the last made "_": batch refuses (rightly) two
+        # inputs that would write one output ("a.pbm" and "a.tiff" both "a.tif")
+        link = {p.name: staged / (p.stem.replace(".", "_") + "_" + p.suffix[1:] + p.suffix)
+                for p in files}  # fmt: skip
+        for p in files:
+            link[p.name].symlink_to(p)
         env = dict(os.environ, PYTHONWARNINGS="ignore", TMPDIR=str(own_tmp))
         argv = [sys.executable, "-m", "imageform", "batch", "convert"]
-        argv += [glob.escape(str(folder)) + "/*", "-o", str(out), "--to", "lab", "--suffix", ".tif"]
+        argv += [glob.escape(str(staged)) + "/*", "-o", str(out), "--to", "lab", "--suffix", ".tif"]
         t0 = time.perf_counter()
         done = subprocess.run(argv, capture_output=True, text=True, env=env, check=False)
         sec = time.perf_counter() - t0
@@ -315,10 +322,16 @@ def batch_rows(folder: Path, rows: list[dict[str, Any]]) -> list[dict[str, Any]]
             if line.startswith("failed: "):
                 rest = line.removeprefix("failed: ")
                 for p in files:
-                    if rest.startswith(f"{p}: "):
-                        failed[p.name] = rest.removeprefix(f"{p}: ").partition(": ")[2][:160]
+                    if rest.startswith(f"{link[p.name]}: "):
+                        why = rest.removeprefix(f"{link[p.name]}: ").partition(": ")[2]
+                        failed[p.name] = why.replace(str(link[p.name]), str(p))[:160]
+        refused = [ln for ln in done.stderr.splitlines() if ln.startswith("imageform: error:")]
         for p in files:
-            got = out / f"{p.stem}.tif"
+            got = out / f"{link[p.name].stem}.tif"
+            if refused:
+                out_rows.append({"file": p.name, "cls": "batch convert", "verdict": "skipped",
+                                 "note": "the run was refused", "s": 0.0})  # fmt: skip
+                continue
             conv = said.get((p.name, "convert lab"), {}).get("verdict")
             if p.name in failed:
                 v, n = "error", failed[p.name]
@@ -340,6 +353,8 @@ def batch_rows(folder: Path, rows: list[dict[str, Any]]) -> list[dict[str, Any]]
         v, n = "fine", f"exit {done.returncode}, {len(failed)} failed"
         if left:
             v, n = "wrong", f"left {', '.join(left)} in the temporary folder"
+        elif refused:
+            v, n = "error", refused[0][:160]
         elif "Traceback" in done.stderr or done.returncode not in (0, 1):
             v, n = "crash", (stray or ["?"])[-1][:160]
         out_rows.append({"file": f"(the folder, {len(files)} files)", "cls": "batch convert",
