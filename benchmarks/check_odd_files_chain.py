@@ -342,7 +342,7 @@ def batch_rows(folder: Path, rows: list[dict[str, Any]]) -> list[dict[str, Any]]
                 declared = note.rpartition("declares ")[2] or None
                 declared = None if declared == "None" else declared
                 v, n = _check_lab(p, got, declared)
-                if conv != "fine":
+                if conv in ("error", "crash", "noisy", "hang"):  # not "wrong": it ran
                     v, n = "wrong", "batch wrote what convert refused"
             else:
                 v, n = "wrong", "no output and no failure listed"
