@@ -138,7 +138,6 @@ class _DecodedOnce:
                 out[a0 - r0 : a1 - r0, b0 - c0 : b1 - c0] = cell[
                     a0 - i * ch : a1 - i * ch, b0 - j * cw : b1 - j * cw
                 ]
-        out = out.astype(self.dtype, copy=False)  # native byte order
         return out[(slice(None, None, rstep), slice(None, None, cstep), *key[2:])]
 
 
