@@ -483,7 +483,7 @@ def main() -> None:
     counts: dict[str, int] = {}
     for r in rows:
         counts[r["verdict"]] = counts.get(r["verdict"], 0) + 1
-    files = len({r["file"] for r in rows})
+    files = len({r["file"] for r in rows if not r["file"].startswith("(the folder")})
     print(header(f"Chained command lines on real image files{args.title} ({files} files)"))
     src = f" --sources {args.sources}" if args.sources else ""
     print(f"`PYTHONPATH=src:. python benchmarks/check_odd_files_chain.py {args.folder}{src}`\n")
