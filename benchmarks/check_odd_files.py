@@ -5,6 +5,10 @@ Run::
     PYTHONPATH=src:. python benchmarks/check_odd_files.py --gather /work/.mirror FOLDER
     PYTHONPATH=src:. python benchmarks/check_odd_files.py FOLDER
 
+``--chain`` runs :mod:`benchmarks.check_odd_files_chain` instead (commands chained as a
+user chains them, their values checked against colour-science; ``--chain --compare BEFORE
+AFTER`` sets two of its tables side by side).
+
 ``--gather MIRRORS`` first fills FOLDER: the files of :data:`SOURCES` copied out of local bare
 git mirrors of their public repositories (``MIRRORS/<owner>+<name>/repo``, the commit named in
 the table; nothing is downloaded), and the edge cases of :func:`make_edge_cases` written here
@@ -709,6 +713,13 @@ def _cell(text: str) -> str:
 
 def main() -> None:
     from benchmarks._common import header, markdown_table
+
+    if sys.argv[1:2] == ["--chain"]:  # the chained sweep with value checks
+        from benchmarks import check_odd_files_chain
+
+        sys.argv[1:2] = []
+        check_odd_files_chain.main()
+        return
 
     ap = argparse.ArgumentParser()
     ap.add_argument("folder", type=Path)

@@ -42,15 +42,17 @@ def _read_video(name: str) -> Any:
 
     from imageform.io import open_video, write_image
 
-    folder = Path(tempfile.mkdtemp(prefix="imageform-registry-"))
-    rows = np.arange(24.0)[:, None]
-    for k in range(10):  # a bright bar moving down 3 rows a field: the fields comb
-        frame = np.zeros((24, 32))
-        frame[0::2] = (np.abs(rows[0::2] - 3.0 * (2 * k) % 24) < 3) * 0.9
-        frame[1::2] = (np.abs(rows[1::2] - 3.0 * (2 * k + 1) % 24) < 3) * 0.9
-        write_image(folder / f"f{k:02d}.png", np.repeat(frame[..., None], 3, axis=-1))
-    with open_video(folder, fps=25, deinterlace=name) as reader:
-        return [f.image.shape for f in reader]
+    # removed afterwards: a folder per call was once left in the temporary folder
+    with tempfile.TemporaryDirectory(prefix="imageform-registry-") as tmp:
+        folder = Path(tmp)
+        rows = np.arange(24.0)[:, None]
+        for k in range(10):  # a bright bar moving down 3 rows a field: the fields comb
+            frame = np.zeros((24, 32))
+            frame[0::2] = (np.abs(rows[0::2] - 3.0 * (2 * k) % 24) < 3) * 0.9
+            frame[1::2] = (np.abs(rows[1::2] - 3.0 * (2 * k + 1) % 24) < 3) * 0.9
+            write_image(folder / f"f{k:02d}.png", np.repeat(frame[..., None], 3, axis=-1))
+        with open_video(folder, fps=25, deinterlace=name) as reader:
+            return [f.image.shape for f in reader]
 
 
 def _stain_normalize(name: str) -> Any:
@@ -156,8 +158,15 @@ def test_registry_is_read_only_and_one_per_concept(name: str) -> None:
     ids=[f"{r}-{m}" for r, (reg, _) in CALLS.items() for m in reg],
 )
 def test_every_name_works(registry: str, method: str) -> None:
+    import glob
+    import os
+    import tempfile
+
+    pattern = os.path.join(tempfile.gettempdir(), "imageform-registry-*")
+    before = set(glob.glob(pattern))
     _, call = CALLS[registry]
     out = call(method)
+    assert set(glob.glob(pattern)) <= before, "a temporary folder left behind"
     values = out if isinstance(out, tuple) else (out,)
     for v in values:
         assert np.all(np.isfinite(np.asarray(v, dtype=np.float64))), (registry, method)

@@ -41,9 +41,14 @@ class _ContiguousRows:
     is often one strip: the whole image).
     """
 
-    def __init__(self, path: Path, offset: int, shape: tuple[int, ...], dtype: Any) -> None:
+    def __init__(
+        self, path: Path, offset: int, shape: tuple[int, ...], dtype: Any, byteorder: str = "<"
+    ) -> None:
         self.path, self.offset = path, offset
         self.shape, self.dtype, self.ndim = shape, np.dtype(dtype), len(shape)
+        # the file's byte order: a big-endian ("MM") TIFF's 16-bit samples read as stored
+        # were byte-swapped (a 16-bit RGB came out as other colours, ΔE 160)
+        self.stored = self.dtype.newbyteorder(byteorder)
 
     def __getitem__(self, key: Any) -> np.ndarray:
         if not isinstance(key, tuple):
@@ -56,7 +61,7 @@ class _ContiguousRows:
         r1, c1 = max(r1, r0), max(c1, c0)
         pixel = int(np.prod(self.shape[2:])) * self.dtype.itemsize
         row_bytes, width = self.shape[1] * pixel, (c1 - c0) * pixel
-        out = np.empty((r1 - r0, c1 - c0, *self.shape[2:]), dtype=self.dtype)
+        out = np.empty((r1 - r0, c1 - c0, *self.shape[2:]), dtype=self.stored)
         flat = out.reshape(r1 - r0, -1).view(np.uint8)
         with open(self.path, "rb") as fh:  # one read per row: only this block's columns
             for i in range(r1 - r0):
@@ -64,6 +69,7 @@ class _ContiguousRows:
                 if len(buf) != width:
                     raise InvalidInputError(f"{self.path} is truncated (row {r0 + i} missing)")
                 flat[i] = np.frombuffer(buf, dtype=np.uint8)
+        out = out.astype(self.dtype, copy=False)  # native byte order
         return out[(slice(None, None, rstep), slice(None, None, cstep), *key[2:])]
 
 
@@ -135,21 +141,58 @@ class _DecodedOnce:
         return out[(slice(None, None, rstep), slice(None, None, cstep), *key[2:])]
 
 
+#: TIFF photometric interpretations whose samples are not RGB or grey (as ``read_image``).
+_NOT_RGB = {5: "CMYK (separated)", 8: "CIELab", 9: "ICCLab", 10: "ITULab", 32844: "LogL",
+            32845: "LogLuv"}  # fmt: skip
+
+
+def _refuse_undecodable(p: Path, page: Any) -> None:
+    """Refuse a TIFF that is not RGB or grey, or that tifffile cannot decode, before reading.
+
+    A CMYK, Lab or LogLuv TIFF, YCbCr not JPEG-compressed (tifffile returns its Y, Cb, Cr
+    samples, or fails on subsampled ones), a compression without a decoder.
+
+    Such files failed inside the block computation, as an "unexpected" NotImplementedError,
+    ValueError or Jpeg8Error (libtiff's LogLuv and old-JPEG test images).
+    """
+    import tifffile
+
+    photometric, compression = int(page.photometric), int(page.compression)
+    what = _NOT_RGB.get(photometric)
+    if what is None and photometric == 6 and compression != 7:
+        what = "YCbCr (not JPEG-compressed)"
+    if what is not None:
+        raise UnreadableFileError(
+            p,
+            f"a {what} TIFF; imageform reads RGB, grey and palette TIFFs (convert it to RGB first)",
+        )
+    if compression not in tifffile.TIFF.DECOMPRESSORS:
+        try:
+            name = tifffile.COMPRESSION(compression).name
+        except ValueError:
+            name = str(compression)
+        raise UnreadableFileError(p, f"its compression {name} has no decoder here")
+
+
 def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any, opened: list[Any] | None) -> Any:
     import tifffile
 
     with tifffile.TiffFile(p) as tf:
         page = tf.pages[0]
+        _refuse_undecodable(p, page)
         strips = (
             isinstance(page, tifffile.TiffPage)
             and not page.is_tiled
             and page.compression == 1
             and page.planarconfig == 1
             and page.is_contiguous
+            and page.bitspersample == 8 * np.dtype(page.dtype).itemsize  # not 12-bit packed
             and len(tf.series[0].levels) == 1
         )
         if strips:
-            src = _ContiguousRows(p, int(page.dataoffsets[0]), tuple(page.shape), page.dtype)
+            src = _ContiguousRows(
+                p, int(page.dataoffsets[0]), tuple(page.shape), page.dtype, tf.byteorder
+            )
     if strips:
         if len(src.shape) != 3 or src.shape[-1] != 3:
             raise InvalidInputError(f"{p}: expected an RGB image (H, W, 3), got {src.shape}")
@@ -180,7 +223,8 @@ class _TiffMeta:
 
     The level sizes (level 0 first), the tile side (None: strips or non-square tiles),
     compression (tifffile's tag value), resolution (pixels per unit, x and y), its unit,
-    level 0's description and ICC profile (the InterColorProfile tag's bytes).
+    level 0's description and ICC profile (the InterColorProfile tag's bytes), and its bits
+    per integer sample (10 in a uint16 container: 1023 is white; None for floats).
     """
 
     levels: tuple[tuple[int, int], ...]
@@ -192,6 +236,7 @@ class _TiffMeta:
     ome: bool = False
     microns: tuple[float, float] | None = None
     icc: bytes | None = None
+    bits: int | None = None
 
 
 def _microns(desc: str) -> tuple[float, float] | None:
@@ -282,6 +327,7 @@ def _tiff_meta(p: Path) -> _TiffMeta:
             tf.is_ome,
             microns,
             bytes(icc) if isinstance(icc, (bytes, bytearray)) and icc else None,
+            int(page.bitspersample) if int(page.sampleformat) == 1 else None,
         )
 
 

@@ -1,9 +1,11 @@
 """The local dask cluster of ``imageform batch``, in a process of its own session.
 
-``python -m imageform.batch._local N`` starts a ``LocalCluster`` with ``N`` worker processes
-(one thread each, on 127.0.0.1), prints its scheduler's address on one line, then keeps it
-going until its standard input closes (the run ended, or the process that started it died),
-and closes it.
+``python -m imageform.batch._local N [SCRATCH]`` starts a ``LocalCluster`` with ``N`` worker
+processes (one thread each, on 127.0.0.1), prints its scheduler's address on one line, then
+keeps it going until its standard input closes (the run ended, or the process that started it
+died), and closes it. Its workers' scratch folder is SCRATCH, a temporary folder :func:`start`
+makes and :meth:`LocalProcessCluster.close` removes (dask's default, ``dask-scratch-space`` in
+the temporary folder, was left behind by every run).
 
 Why a process of its own, started in a new session (:func:`start`):
 
@@ -26,9 +28,11 @@ import contextlib
 import logging
 import os
 import selectors
+import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 from typing import IO, Any
@@ -41,8 +45,8 @@ __all__ = ["LocalProcessCluster", "main", "start"]
 class LocalProcessCluster:
     """A cluster process started by :func:`start`: its scheduler ``address``, and ``close``."""
 
-    def __init__(self, proc: subprocess.Popen[str], address: str) -> None:
-        self.proc, self.address = proc, address
+    def __init__(self, proc: subprocess.Popen[str], address: str, scratch: str = "") -> None:
+        self.proc, self.address, self.scratch = proc, address, scratch
 
     def close(self, timeout: float = 30.0) -> None:
         """Close the cluster (its standard input), then kill its whole session after ``timeout``."""
@@ -58,6 +62,8 @@ class LocalProcessCluster:
                 self.proc.kill()
         with contextlib.suppress(subprocess.TimeoutExpired):
             self.proc.wait(timeout=10)
+        if self.scratch:
+            shutil.rmtree(self.scratch, ignore_errors=True)
 
 
 def start(
@@ -69,10 +75,12 @@ def start(
     and ``KeyboardInterrupt`` (the process ended) as soon as ``stop()`` is true (Ctrl-C).
     """
     env = dict(os.environ)
+    scratch = tempfile.mkdtemp(prefix="imageform-batch-")
+    env["DASK_TEMPORARY_DIRECTORY"] = scratch  # the scheduler's and nannies' lock files too
     src = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     env["PYTHONPATH"] = os.pathsep.join(p for p in (src, env.get("PYTHONPATH")) if p)
     proc = subprocess.Popen(
-        [sys.executable, "-m", "imageform.batch._local", str(int(n_workers))],
+        [sys.executable, "-m", "imageform.batch._local", str(int(n_workers)), scratch],
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         stderr=subprocess.DEVNULL,
@@ -83,15 +91,15 @@ def start(
     try:
         address = _read_line(proc, timeout, stop)
     except KeyboardInterrupt:
-        LocalProcessCluster(proc, "").close(timeout=0)  # nothing to keep: end it now
+        LocalProcessCluster(proc, "", scratch).close(timeout=0)  # nothing to keep: end it now
         raise
     if not address.startswith("tcp://"):
-        LocalProcessCluster(proc, "").close(timeout=5)
+        LocalProcessCluster(proc, "", scratch).close(timeout=5)
         raise ImageformError(
             f"the local dask cluster did not start in {timeout:g} s"
             + (f" (exit {proc.returncode})" if proc.poll() is not None else "")
         )
-    return LocalProcessCluster(proc, address)
+    return LocalProcessCluster(proc, address, scratch)
 
 
 def _read_line(proc: subprocess.Popen[str], timeout: float, stop: Callable[[], bool] | None) -> str:
@@ -141,7 +149,7 @@ async def _mend(cluster: Any, n_workers: int, since: dict[str, float]) -> None:
         cluster.scale(n_workers)
 
 
-def _serve(n_workers: int, stdin: IO[str], out: IO[str]) -> None:
+def _serve(n_workers: int, stdin: IO[str], out: IO[str], scratch: str | None = None) -> None:
     import distributed
 
     cluster = distributed.LocalCluster(
@@ -155,6 +163,7 @@ def _serve(n_workers: int, stdin: IO[str], out: IO[str]) -> None:
         silence_logs=logging.CRITICAL,
         preload=["imageform.batch._worker_setup"],
         death_timeout=60,  # a nanny whose worker never connects gives up, never waits forever
+        local_directory=scratch,  # None: dask's own (dask-scratch-space, never removed)
     )
     try:
         cluster.scale(n_workers)
@@ -177,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # only the run ends it
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     with contextlib.suppress(SystemExit):
-        _serve(int(args[0]), sys.stdin, sys.stdout)
+        _serve(int(args[0]), sys.stdin, sys.stdout, args[1] if len(args) > 1 else None)
     return 0
 
 

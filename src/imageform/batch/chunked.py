@@ -192,6 +192,13 @@ def _wb_method(value: object) -> str:
     )
 
 
+def _full_range(block: np.ndarray, bits: int) -> np.ndarray:
+    """Scale a block of ``bits``-bit integer samples to its container's full range."""
+    top = (1 << bits) - 1
+    scale = np.float64(np.iinfo(block.dtype).max) / top
+    return np.round(np.minimum(block, top) * scale).astype(block.dtype)
+
+
 def process_chunked(
     src: str | Path,
     dst: str | Path,
@@ -344,6 +351,10 @@ def process_chunked(
                     f"expected chunk a multiple of the pyramid factor {f} (level {k}), got {chunk}"
                 )
         in_int = x.dtype in (np.uint8, np.uint16)
+        if in_int and meta is not None and meta.bits and meta.bits < 8 * x.dtype.itemsize:
+            # 10, 12, 14-bit samples in uint16 are colours with 2**bits - 1 as white: scaled to
+            # the container's range, as imageform convert reads them
+            x = x.map_blocks(_full_range, meta.bits, dtype=x.dtype)
         gains: np.ndarray | None = None
         where: str | None = None
         workers = num_workers or os.cpu_count() or 1

@@ -599,6 +599,19 @@ def _pillow_orientation(im: Any) -> int:
     return value if 1 <= value <= 8 else 1
 
 
+def _exif_color_space(im: Any) -> tuple[Any, Any]:
+    """Return EXIF's ColorSpace (0xA001) and interoperability index.
+
+    (None, None) where the EXIF block cannot be parsed (a PNG's eXIf chunk of junk: the
+    pixels are still readable, and the orientation reader ignores such a block too).
+    """
+    try:
+        exif = im.getexif()
+        return exif.get_ifd(0x8769).get(0xA001), exif.get_ifd(0xA005).get(0x0001)
+    except (OSError, SyntaxError, ValueError, TypeError, KeyError, struct.error):
+        return None, None
+
+
 def _transparent(im: Any, fmt: str) -> bool:
     """Whether a Pillow image has a transparent colour or index (GIF, palette BMP)."""
     return fmt != "jpeg" and im.info.get("transparency") is not None
@@ -775,8 +788,10 @@ def _read_png(p: Path, limit: int) -> np.ndarray:
     info = _png_header(p, data)
     _check_pixels(p, info, limit)
     try:
-        # Adam7-interlaced (IHDR's last byte): libpng warns of imagecodecs' call
-        decode = _png_decode_interlaced if data[28] == 1 else imagecodecs.png_decode
+        # Adam7-interlaced (IHDR's last byte): libpng warns of imagecodecs' call; an eXIf
+        # chunk libpng finds invalid: it says so on stderr (the pixels are fine)
+        quiet = data[28] == 1 or _png_has_chunk(data, b"eXIf")
+        decode = _png_decode_interlaced if quiet else imagecodecs.png_decode
         arr = decode(data)
     except Exception as exc:
         raise UnreadableFileError(p, f"{_one_line(exc)}") from None
@@ -786,14 +801,28 @@ def _read_png(p: Path, limit: int) -> np.ndarray:
 _stderr_lock = threading.Lock()
 
 
+def _png_has_chunk(data: bytes, kind: bytes) -> bool:
+    """Whether a PNG holds a chunk of type ``kind`` before its image data."""
+    pos = len(_PNG_SIGNATURE)
+    while pos + 8 <= len(data):
+        length, got = struct.unpack(">I4s", data[pos : pos + 8])
+        if got == kind:
+            return True
+        if got in (b"IDAT", b"IEND"):
+            return False
+        pos += 12 + length
+    return False
+
+
 def _png_decode_interlaced(data: bytes) -> Any:
-    """Decode an interlaced PNG without libpng's note on ``sys.stderr``.
+    """Decode an interlaced PNG, or one with an eXIf chunk, without libpng's notes.
 
     imagecodecs reads every PNG with ``png_read_image`` and libpng then writes "PNG warning:
     Interlace handling should be turned on when using png_read_image" onto ``sys.stderr``
     (the pixels are right: PngSuite's interlaced images equal OpenCV's decoding), a second
     line beside a command's one. That line is dropped; any other libpng message becomes a
-    warning. ``sys.stderr`` is swapped for the decode (interlaced PNGs only), under a lock.
+    warning (libpng's "eXIf: invalid" for an EXIF block it cannot parse, which the pixels
+    do not need). ``sys.stderr`` is swapped for the decode (interlaced PNGs only), under a lock.
     """
     import contextlib
     import io
@@ -1513,9 +1542,7 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
             srgb_chunk = fmt == "png" and "srgb" in im.info
             gamma = im.info.get("gamma") if fmt == "png" else None
             chrm = im.info.get("chromaticity") if fmt == "png" else None
-            exif = im.getexif()
-            cs = exif.get_ifd(0x8769).get(0xA001)
-            interop = exif.get_ifd(0xA005).get(0x0001)
+            cs, interop = _exif_color_space(im)
     except (OSError, ValueError, SyntaxError) as err:  # UnidentifiedImageError is an OSError
         raise UnreadableFileError(p, f"{_one_line(err)}") from None
     if cmyk:  # read_image converts it through its profile to sRGB

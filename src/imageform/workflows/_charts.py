@@ -137,7 +137,7 @@ def read_chart(
     if path.suffix.lower() == ".csv":
         pat, ref = _read_csv(path, rows * cols)
         return ChartInput(path, pat, ref)
-    img = read(path, opts) if image is None else image
+    img = read(path, opts, colours=True) if image is None else image
     if img.ndim != 3 or img.shape[-1] != 3:
         raise InvalidInputError(
             f"{flag} {path}: expected an RGB image with a chart, got shape {img.shape}"

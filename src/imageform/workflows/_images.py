@@ -174,15 +174,60 @@ def gpu_bands(run: Run, what: str, fn: Any) -> Any:
     return band
 
 
-def read(path: Path, opts: Any, *, alpha: str | None = None) -> Any:
-    """Read ``path`` with the options' alpha rule and pixel limit (an :class:`ImageIn`)."""
+def read(path: Path, opts: Any, *, alpha: str | None = None, colours: bool = False) -> Any:
+    """Read ``path`` with the options' alpha rule and pixel limit (an :class:`ImageIn`).
+
+    ``colours``: the pixels are read as colours, so integer TIFF samples of fewer bits than
+    their container (10, 12, 14 bits in uint16; TIFF 6.0's MaxSampleValue, ``2**bits - 1``,
+    is white) are scaled to the container's full range, as a PNG stores them. ``read_image``
+    keeps them as stored (a sensor's numbers, DN, which the measuring commands read as
+    such); read as colours unscaled, a 10-bit photograph came out 64 times too dark.
+    """
     from imageform.io import read_image
 
-    return read_image(
+    img = read_image(
         path,
         alpha=str(alpha or getattr(opts, "alpha", "reject")),
         max_pixels=getattr(opts, "max_pixels", None),
     )
+    return full_range(path, img) if colours else img
+
+
+def tiff_sample_bits(path: Path) -> int | None:
+    """Bits per sample of a TIFF's first page with integer samples, None for other files."""
+    with open(path, "rb") as fh:
+        if fh.read(4) not in (b"II*\0", b"MM\0*", b"II+\0", b"MM\0+"):
+            return None
+    import tifffile
+
+    try:
+        with tifffile.TiffFile(path) as tif:
+            page = tif.pages.first
+            if int(page.sampleformat) != 1 or int(page.photometric) == 3:  # uint; palette
+                return None
+            return int(page.bitspersample)
+    except Exception:  # read_image has read it: nothing more to say here
+        return None
+
+
+def full_range(path: Path, image: Any) -> Any:
+    """Scale ``image``'s integer samples of fewer bits than their container to its range.
+
+    ``round(code * (2**container - 1) / (2**bits - 1))``, for a TIFF at ``path`` whose
+    BitsPerSample says fewer bits than the sample type holds; anything else as it is.
+    """
+    import numpy as np
+
+    a = image
+    if not isinstance(a, np.ndarray) or a.dtype not in (np.uint8, np.uint16):
+        return a
+    full = 8 * a.dtype.itemsize
+    bits = tiff_sample_bits(path)
+    if bits is None or not 1 < bits < full:
+        return a
+    top = (1 << bits) - 1
+    scale = np.float64(np.iinfo(a.dtype).max) / top
+    return np.round(np.minimum(a, top) * scale).astype(a.dtype)
 
 
 def not_read(given: int, n_read: int) -> str:

@@ -60,7 +60,7 @@ __getattr__ = _deprecate.module_getattr(
 
 
 def _rgb(path: Path, opts: Any) -> Any:
-    img = read(path, opts)
+    img = read(path, opts, colours=True)
     if img.shape[-1] != 3:
         raise InvalidInputError(f"{path}: expected an RGB image, got {img.shape[-1]} channel(s)")
     refuse_unscaled_floats(path, img)

@@ -161,7 +161,7 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
     from imageform.analysis.synthetic import COLORCHECKER_SRGB8
     from imageform.io import write_image
 
-    img = read(image, opts)
+    img = read(image, opts, colours=True)
     if img.ndim != 3 or img.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got shape {img.shape}")
     det = detect_colorchecker(img, max_size=opts.max_size, min_score=opts.min_score)

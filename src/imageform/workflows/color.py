@@ -280,7 +280,7 @@ def _read_dicom(image: Path, opts: ConvertOptions) -> Any:
     given = "--window" if opts.window is not None else "--frame"
     if opts.window is None and opts.frame is None:
         if not _is_dicom(image) or (frames := dicom_info(image).frames) <= 1:
-            return read(image, opts)
+            return read(image, opts, colours=True)
         raise InvalidInputError(
             f"{image} is a multi-frame DICOM of {frames} frames; convert one with --frame N "
             f"(0 to {frames - 1})"
@@ -560,7 +560,7 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
             "--method manual takes one of --cct KELVIN (e.g. 3200) or --illuminant NAME "
             "(e.g. A, D50, F2)"
         )
-    img = read(image, opts)
+    img = read(image, opts, colours=True)
     if img.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got {img.shape[-1]} channel(s)")
     refuse_unscaled_floats(image, img)
@@ -601,7 +601,7 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
         )
 
         # the estimate reads the whole image on the CPU; the gains are applied on the device
-        keep = white_balance_mask(img, opts.mask, image, lambda p: read(p, opts))
+        keep = white_balance_mask(img, opts.mask, image, lambda p: read(p, opts, colours=True))
         gains = np.asarray(
             white_balance_gains(
                 img, opts.method, transfer=transfer, space=space, mask=keep, **opts.params()
@@ -677,7 +677,7 @@ def delta_e(run: Run, opts: DeltaEOptions, *, out: None, reference: Path, test: 
     from imageform.color.delta_e import describe_delta_e
 
     refuse_absent_device(opts)  # before any file is read
-    a, b = read(reference, opts), read(test, opts)
+    a, b = read(reference, opts, colours=True), read(test, opts, colours=True)
     for path, arr in ((reference, a), (test, b)):
         if arr.shape[-1] != 3:
             raise InvalidInputError(
@@ -770,7 +770,7 @@ def cvd(run: Run, opts: CvdOptions, *, out: Path, image: Path) -> Result:
     from imageform.color.cvd import simulate_cvd
     from imageform.io import RGB_PROFILED
 
-    arr = read(image, opts)
+    arr = read(image, opts, colours=True)
     if arr.shape[-1] != 3:
         raise InvalidInputError(f"{image}: expected an RGB image, got {arr.shape[-1]} channel(s)")
     refuse_unscaled_floats(image, arr)
