@@ -277,9 +277,9 @@ def test_pixel_size_scales_the_shape_rules() -> None:
     bar = np.zeros(img.shape[:2], dtype=bool)
     bar[500:508, 500:540] = True
     assert not tissue_mask(img, i0=0.94).any(where=bar)
-    assert tissue_mask(img, i0=0.94, mpp=0.5)[bar].sum() == 0
-    assert tissue_mask(img, i0=0.94, mpp=0.125)[bar].all()
-    assert not tissue_mask(img, i0=0.94, mpp=0.125)[201, 202]
+    assert tissue_mask(img, i0=0.94, pixel_size_um=0.5)[bar].sum() == 0
+    assert tissue_mask(img, i0=0.94, pixel_size_um=0.125)[bar].all()
+    assert not tissue_mask(img, i0=0.94, pixel_size_um=0.125)[201, 202]
     assert not tissue_mask(img, i0=0.94)[201, 202]
 
 
@@ -395,7 +395,7 @@ def test_stain_mixtures_are_never_pen(ref: int, c1: float, c2: float) -> None:
         ({"image": np.zeros((4, 4, 3)), "dark_luminance": 2.0}, "dark_luminance"),
         ({"image": np.zeros((4, 4, 3)), "beta": -1.0}, "beta"),
         ({"image": np.zeros((4, 4, 3)), "i0": 2.0}, "i0"),
-        ({"image": np.zeros((4, 4, 3)), "mpp": 0.0}, "mpp"),
+        ({"image": np.zeros((4, 4, 3)), "pixel_size_um": 0.0}, "pixel_size_um"),
     ],
 )
 def test_tissue_mask_bad_input(kwargs: dict[str, Any], match: str) -> None:
@@ -539,7 +539,7 @@ def test_lattice_rows_keeps_the_smallest_keys() -> None:
 
 def test_pixel_size_of_microscopy_tiffs(tmp_path: Path) -> None:
     tifffile = pytest.importorskip("tifffile")
-    from imageform.io import pixel_size
+    from imageform.io import pixel_size_um
 
     px = np.zeros((4, 4, 3), np.uint8)
     ome = tmp_path / "s.ome.tif"
@@ -548,21 +548,21 @@ def test_pixel_size_of_microscopy_tiffs(tmp_path: Path) -> None:
         px,
         metadata={"PhysicalSizeX": 0.5, "PhysicalSizeY": 0.5, "PhysicalSizeXUnit": "µm"},
     )
-    assert pixel_size(ome) == (0.5, 0.5)
+    assert pixel_size_um(ome) == (0.5, 0.5)
     svs = tmp_path / "s.tif"
     tifffile.imwrite(svs, px, description="Aperio Image Library v12\n4 x 4 |MPP = 0.2527|")
-    assert pixel_size(svs) == (0.2527, 0.2527)
+    assert pixel_size_um(svs) == (0.2527, 0.2527)
     plain = tmp_path / "p.tif"
     tifffile.imwrite(plain, px, resolution=(72, 72))  # photo software's 72 dpi: not read
-    assert pixel_size(plain) is None
+    assert pixel_size_um(plain) is None
     iio = pytest.importorskip("imageio.v3")
     iio.imwrite(tmp_path / "p.png", px)
-    assert pixel_size(tmp_path / "p.png") is None
+    assert pixel_size_um(tmp_path / "p.png") is None
     with pytest.raises(InvalidInputError, match="does not exist"):
-        pixel_size(tmp_path / "none.tif")
+        pixel_size_um(tmp_path / "none.tif")
 
 
-def test_stain_normalize_passes_the_files_pixel_size(tmp_path: Path) -> None:
+def test_stain_normalize_passes_the_files_pixel_size_um(tmp_path: Path) -> None:
     """An OME TIFF at 0.125 um per pixel: a 40 x 8 black bar is nucleus-sized, kept."""
     tifffile = pytest.importorskip("tifffile")
     from imageform.workflows.analysis import StainNormalizeOptions, _stain_mask

@@ -46,8 +46,8 @@ TISSUE_MASK_RULES: MappingProxyType[str, str] = MappingProxyType(
         "OD >= 0.5) is a stroke or its flags large: the dense DAB of IHC nuclei is a blob; "
         "black ink (mostly neutral with mean OD >= 2.5) a stroke from 3.5 times as long as "
         "wide; a grey region of at most 24 pixels by the glass is a speck of dye. Lengths "
-        "and areas scale with mpp (0.5 um per pixel: as given), a stroke's length with the "
-        "image's shorter side under 512 pixels",
+        "and areas scale with pixel_size_um (0.5 um per pixel: as given), a stroke's length "
+        "with the image's shorter side under 512 pixels",
         "he": "H&E slides only (he=True; DAB is brown and hematoxylin + DAB grey): yellow, "
         "orange and brown margin dye and pigment, OD_blue > 1.2 OD_green with OD_blue >= "
         "pen_min_od; grey (label, slide edge, dirt), max/min of the ODs <= 1.25 with mean "
@@ -68,7 +68,7 @@ def tissue_mask(
     pen_min_od: float = 0.3,
     dark_luminance: float = 0.08,
     margin: int = 1,
-    mpp: float | None = None,
+    pixel_size_um: float | None = None,
 ) -> Array:
     r"""Pixels of stained tissue: True where a pixel is neither glass nor an artefact.
 
@@ -133,13 +133,13 @@ def tissue_mask(
 
     **Scale.** The shape rules' lengths (24 pixels) and areas (16 384, 1024, 512, 24 and
     4 pixels) are those of a 512-pixel tile at 0.5 µm per pixel (tuned on 224-2000 pixel
-    tiles at 0.25-0.5 µm and slide thumbnails). With the pixel size known (``mpp``) the
-    lengths scale by :math:`s = 0.5 / \mathrm{mpp}` and the areas by :math:`s^2`, with
+    tiles at 0.25-0.5 µm and slide thumbnails). With the pixel size known (``pixel_size_um``, µm)
+    the lengths scale by :math:`s = 0.5 / p` and the areas by :math:`s^2`, with
     :math:`s` within [0.25, 8]. A stroke's length test is also at most the image's shorter
     side over 512 times the tile's (a stroke across a small crop is cut short by its edges:
     0.5 % of a 224-pixel crop is a stroke 31 pixels long; the image's size says nothing of
     its nuclei's, so widths and areas stay). A 512-pixel tile, or a larger image, without
-    ``mpp`` is scaled as before.
+    ``pixel_size_um`` is scaled as before.
 
     Parameters
     ----------
@@ -161,8 +161,9 @@ def tissue_mask(
         Luma below which a pixel is dark, in [0, 1].
     margin : int
         Pixels the artefact flags grow by, in [0, 64].
-    mpp : float, optional
-        Pixel size in micrometres (µm per pixel, > 0), when known: the TIFF readers of
+    pixel_size_um : float, optional
+        Pixel size :math:`p` in micrometres (µm per pixel at the specimen, > 0; a slide's
+        "mpp"), when known: the TIFF readers of
         :mod:`imageform.batch` give it (OME ``PhysicalSizeX``, Aperio ``MPP``) and
         ``imageform stain`` passes it on. None: the image's size alone sets the scale.
 
@@ -221,6 +222,8 @@ def tissue_mask(
         "pen_min_od": as_real(pen_min_od, "pen_min_od", minimum=0.0, maximum=10.0),
         "dark_luminance": as_real(dark_luminance, "dark_luminance", minimum=0.0, maximum=1.0),
         "margin": as_int(margin, "margin", minimum=0, maximum=64),
-        "mpp": None if mpp is None else as_real(mpp, "mpp", minimum=1e-3, maximum=1e4),
+        "mpp": None
+        if pixel_size_um is None
+        else as_real(pixel_size_um, "pixel_size_um", minimum=1e-3, maximum=1e4),
     }
     return keep_mask(rgb, _resolve_i0(rgb, i0), params, flags["glass"], float(beta))

@@ -129,7 +129,7 @@ def _stain_stats(
         if method != "macenko" or microns is None:
             return measure(img)
         mpp = float(np.sqrt(microns[0] * microns[1])) * reduced
-        return measure(img, mask=analysis.tissue_mask(img, glass=False, mpp=mpp))
+        return measure(img, mask=analysis.tissue_mask(img, glass=False, pixel_size_um=mpp))
 
     if stats_from == "level" and len(levels) < 2:
         raise InvalidInputError(

@@ -94,7 +94,7 @@ __all__ = [
     "image_format",
     "image_info",
     "max_pixels",
-    "pixel_size",
+    "pixel_size_um",
     "read_dicom",
     "read_image",
     "write_image",
@@ -398,7 +398,7 @@ def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
     return series, info
 
 
-def pixel_size(path: str | Path) -> tuple[float, float] | None:
+def pixel_size_um(path: str | Path) -> tuple[float, float] | None:
     r"""Return the pixel size in micrometres (x, y) a microscopy TIFF states, or None.
 
     A slide scanner's TIFF states it in its description: OME-XML ``PhysicalSizeX`` /
@@ -418,7 +418,7 @@ def pixel_size(path: str | Path) -> tuple[float, float] | None:
     >>> p = getfixture("tmp_path") / "s.ome.tif"
     >>> tifffile.imwrite(p, np.zeros((4, 4, 3), np.uint8), metadata={"PhysicalSizeX": 0.25,
     ...     "PhysicalSizeY": 0.25, "PhysicalSizeXUnit": "µm", "PhysicalSizeYUnit": "µm"})
-    >>> pixel_size(p)
+    >>> pixel_size_um(p)
     (0.25, 0.25)
     """
     import re

@@ -233,12 +233,12 @@ def _stain_mask(
     """Return what ``--mask`` means for one image: a keyword (Macenko) or booleans.
 
     ``auto`` and ``he`` on a file that states its pixel size (``path``; OME or Aperio TIFF):
-    :func:`~imageform.analysis.tissue_mask` with that ``mpp``, as booleans.
+    :func:`~imageform.analysis.tissue_mask` with that ``pixel_size_um``, as booleans.
     """
     import numpy as np
 
     from imageform import analysis
-    from imageform.io import pixel_size
+    from imageform.io import pixel_size_um
 
     key = opts.mask or ("auto" if opts.method == "macenko" else "none")
     if key not in _MASK_WORDS:
@@ -255,13 +255,15 @@ def _stain_mask(
             return m
     if key == "none":
         return None
-    size = pixel_size(path) if path is not None else None
+    size = pixel_size_um(path) if path is not None else None
     mpp = None if size is None else float(np.sqrt(size[0] * size[1]))
     if opts.method == "macenko":  # the estimator's own I0 and no glass rule, as mask="auto"
         return (
-            key if mpp is None else analysis.tissue_mask(img, glass=False, he=key == "he", mpp=mpp)
+            key
+            if mpp is None
+            else analysis.tissue_mask(img, glass=False, he=key == "he", pixel_size_um=mpp)
         )
-    return analysis.tissue_mask(img, he=key == "he", mpp=mpp)
+    return analysis.tissue_mask(img, he=key == "he", pixel_size_um=mpp)
 
 
 def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
