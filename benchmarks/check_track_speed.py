@@ -23,8 +23,15 @@ The data (not in this repository; ``DATA`` laid out as ``check_track_fresh.py`` 
   (4K), the same frames halved (block means, 1920 x 1080, the camera matrix halved) and the
   repository's 7 photographs 4096 x 3072 (all seen by earlier sessions: tuning).
 
+With ``--command``, a second table: the ``imageform track`` command end to end (a separate
+process, its frames decoded by the video reader in RGB) on the 4K frames encoded here as an
+H.264 video (libx264, CRF 14, 30 fps, yuv420p): frames per second as the command prints them
+(wall clock, decoding included; the median of ``--repeat`` runs after a warm-up), the
+process's CPU time per frame, the frames with a pose, and the poses apart from OpenCV's loop
+on the same decoded frames (grey, OpenCV's luma) as in the first table.
+
 Run with ``OPENBLAS_NUM_THREADS=1 NUMBA_NUM_THREADS=1 PYTHONPATH=src:.``:
-``python benchmarks/check_track_speed.py DATA [--repeat 5] [--only NAME]``.
+``python benchmarks/check_track_speed.py DATA [--repeat 5] [--only NAME] [--command]``.
 """
 
 from __future__ import annotations
@@ -146,6 +153,97 @@ def row(seq: Sequence, runs: list[tuple[list[Track], list[Track], list[str]]]) -
     ]
 
 
+def _wb_video(data: Path, tmp: Path) -> tuple[Path, Path, Sequence]:
+    """Encode the 4K frames as an H.264 video, write its camera file; the decoded frames."""
+    import glob
+
+    import av
+    import cv2
+
+    from imageform.geometry import BrownConrady, Camera
+    from imageform.io import write_camera
+
+    wb = sequences(data, True)[0]
+    paths = sorted(glob.glob(str(data / "wb" / "data" / "calibration_video" / "*.jpg")))
+    video = tmp / "wb4k.mp4"
+    out = av.open(str(video), "w")
+    st = out.add_stream("libx264", rate=30)
+    st.width, st.height, st.pix_fmt = 3840, 2160, "yuv420p"
+    st.options = {"crf": "14", "preset": "fast"}
+    for p in paths:
+        rgb = cv2.cvtColor(cv2.imread(p), cv2.COLOR_BGR2RGB)
+        for pk in st.encode(av.VideoFrame.from_ndarray(rgb, format="rgb24")):
+            out.mux(pk)
+    for pk in st.encode():
+        out.mux(pk)
+    out.close()
+    d = list(wb.dist[:5]) + [0.0] * (5 - min(5, wb.dist.size))
+    camera = tmp / "wb4k.toml"
+    write_camera(camera, Camera(wb.K, distortion=BrownConrady(*d), image_size=(3840, 2160)))
+    with av.open(str(video)) as c:
+        rgb = [f.to_ndarray(format="rgb24") for f in c.decode(video=0)]
+    grey = [cv2.cvtColor(f, cv2.COLOR_RGB2GRAY) for f in rgb]
+    seq = Sequence(wb.name + " (H.264)", wb.board, wb.K, wb.dist, lambda: grey, True, "")
+    seq.frames = grey
+    return video, camera, seq
+
+
+def command_rows(data: Path, repeat: int) -> list[list[object]]:
+    """``imageform track`` end to end on the 4K video: speed, poses, poses apart from OpenCV's."""
+    import csv
+    import json
+    import resource
+    import subprocess
+    import tempfile
+
+    from imageform.geometry import rvec_to_matrix
+
+    with tempfile.TemporaryDirectory() as t:
+        tmp = Path(t)
+        video, camera, seq = _wb_video(data, tmp)
+        cv = run_opencv(seq)
+        b = seq.board
+        cmd = [
+            sys.executable, "-m", "imageform", "track", str(video), "-o", str(tmp / "p.csv"),
+            "--camera", str(camera), "--board", f"charuco:{b.size[0]}x{b.size[1]}",
+            "--square", f"{b.square}mm", "--marker", f"{b.marker}mm",
+            "--dictionary", b.dictionary.replace("_", "-"), "--json", "--force",
+        ]  # fmt: skip
+        env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
+        fps, cpu, lat = [], [], []
+        for k in range(repeat + 1):
+            r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+            done = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
+            r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+            doc = json.loads(done.stdout)
+            if k:  # the first run warms up (numba's cache, the files' pages)
+                fps.append(float(doc["fps"]))
+                lat.append(float(doc["latency_ms_median"]))
+                used = r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime
+                cpu.append(1e3 * used / int(doc["frames"]))
+        with open(tmp / "p.csv") as fh:
+            rows = list(csv.DictReader(fh))
+    rot = []
+    for r, c in zip(rows, cv, strict=True):
+        if r["found"] == "1" and c.pose is not None:
+            rv = np.array([float(r[x]) for x in ("rx", "ry", "rz")])
+            tv = np.array([float(r[x]) for x in ("tx", "ty", "tz")])
+            rot.append(_apart(seq.board, (np.asarray(rvec_to_matrix(rv)), tv), c.pose))
+    found = sum(r["found"] == "1" for r in rows)
+    return [
+        [
+            seq.name,
+            f"{len(rows)} x 3840 x 2160",
+            f"{found} / {sum(c.pose is not None for c in cv)} / {len(rot)}",
+            f"{_med([a for a, _ in rot])} / {_pct([a for a, _ in rot], 95)}",
+            f"{_med([t for _, t in rot])} / {_pct([t for _, t in rot], 95)}",
+            f"{statistics.median(fps):.2f}",
+            f"{statistics.median(lat):.1f}",
+            f"{statistics.median(cpu):.0f}",
+        ]
+    ]
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the sequences and print the table."""
     import cv2
@@ -154,6 +252,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("data", type=Path, help="folder with caliscope/, p2s/, wb/")
     ap.add_argument("--repeat", type=int, default=5, help="timed runs of each sequence")
     ap.add_argument("--only", default="", help="run only the sequences whose name has this")
+    ap.add_argument("--command", action="store_true", help="also imageform track end to end")
     args = ap.parse_args(argv)
     threads = int(os.environ.get("NUMBA_NUM_THREADS", "1"))
     cv2.setNumThreads(threads)
@@ -190,6 +289,21 @@ def main(argv: list[str] | None = None) -> int:
     ]
     print(markdown_table(cols, rows))
     print(f"Median over {args.repeat} timed runs after a warm-up; CPU time of the process.")
+    if args.command:
+        cols = [
+            "video",
+            "frames x width x height",
+            "with a pose: imageform track / OpenCV / both",
+            "rotation apart deg, median / p95",
+            "translation apart % of distance, median / p95",
+            "frames per second (wall, as printed)",
+            "median latency ms (a frame's tracking, wall)",
+            "CPU ms per frame (the process's, start-up included)",
+        ]
+        print()
+        print("`imageform track` end to end (decoding included):")
+        print()
+        print(markdown_table(cols, command_rows(args.data, args.repeat)))
     return 0
 
 

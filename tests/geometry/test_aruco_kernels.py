@@ -255,3 +255,22 @@ def test_block_means_u8_rounds_each_blocks_mean() -> None:
         out = block_means_u8(g8, f)
         assert out.dtype == np.uint8 and out.shape == (h, w)
         np.testing.assert_array_equal(out, ref.astype(np.uint8))
+
+
+def test_luma_u8_is_the_detectors_luma_rounded_and_its_numpy_twin() -> None:
+    """A 4K RGB frame's grey (BoardTracker): 0.299 R + 0.587 G + 0.114 B rounded, both paths."""
+    from imageform._kernels.aruco import luma_u8
+    from imageform.geometry.tracking import _luma_u8_numpy
+
+    rng = np.random.default_rng(5)
+    rgb = rng.integers(0, 256, (41, 67, 3), dtype=np.uint8)
+    rgb[0, :8] = [[0, 0, 0], [255, 255, 255], [255, 0, 0], [0, 255, 0], [0, 0, 255],
+                  [1, 1, 1], [254, 255, 254], [128, 127, 129]]  # fmt: skip
+    ref = np.floor(rgb.astype(np.float64) @ [0.299, 0.587, 0.114] + 0.5)
+    out = luma_u8(rgb)
+    assert out.dtype == np.uint8 and out.shape == (41, 67)
+    np.testing.assert_array_equal(out, ref.astype(np.uint8))
+    np.testing.assert_array_equal(_luma_u8_numpy(rgb), out)
+    # the division by 1000 without a division: exact over every sum the weights reach
+    s = np.arange(0, 255 * 1000 + 1, dtype=np.int64) + 500
+    np.testing.assert_array_equal((s * 67109) >> 26, s // 1000)

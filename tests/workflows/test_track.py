@@ -608,3 +608,29 @@ def test_4k_frames_read_the_markers_halved_and_track_the_corners(
         order = np.argsort(ref.ids)
         assert np.abs(pose.image_points - ref.corners[order]).max() < 0.05
     assert where == ["frame", "tracked", "tracked"] and calls == [2]
+
+
+def test_4k_rgb_frames_are_read_halved_as_their_grey(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A 4K RGB frame (the video reader's, imageform track) is made grey uint8 with the
+    detector's luma weights and its markers read on its half: the poses of the grey frames."""
+    from imageform.geometry import charuco
+    from imageform.geometry.tracking import _luma_u8_numpy
+
+    board, k4, _, frames = _frames_4k(2)
+    rgbs = [np.repeat(g[..., None], 3, axis=2) for g in frames]
+    rgbs[1][..., 0] = np.clip(rgbs[1][..., 0].astype(np.int16) + 3, 0, 255).astype(np.uint8)
+    greys = [_luma_u8_numpy(c) for c in rgbs]
+    calls = []
+    real = charuco._detect_reduced
+
+    def spy(*args: object, **kw: object) -> object:
+        calls.append(args[2])
+        return real(*args, **kw)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(charuco, "_detect_reduced", spy)
+    a, b = BoardTracker(board, k4), BoardTracker(board, k4)
+    for c, g in zip(rgbs, greys, strict=True):
+        pa, pb = a.update(c), b.update(g)
+        assert pa.found and pa.searched == pb.searched and pa.corners == 24
+        np.testing.assert_array_equal(pa.image_points, pb.image_points)
+    assert calls == [2, 2]

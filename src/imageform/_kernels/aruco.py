@@ -20,7 +20,8 @@ r"""numba kernels of the ArUco marker detector (``imageform.geometry.aruco``).
   image in integers (the same dark pixels, a quarter of the memory traffic);
   :func:`box_integral_roi`: the table of a region of the image, for the full-resolution
   look at a candidate found on the image reduced by :func:`block_means`; :func:`unit_grey`:
-  uint8 to [0, 1].
+  uint8 to [0, 1]; :func:`luma_u8`: an RGB uint8 frame to its grey uint8 (the detector's
+  Rec. 601 weights, rounded), for the markers' reading on a 4K video's halved frame.
 - :func:`sample_quadrants`: the ChArUco corners' squares sampled through their local
   homographies (``imageform.geometry.charuco``'s seen-whole check).
 
@@ -57,6 +58,7 @@ __all__ = [
     "dark_components",
     "dark_components_u8",
     "decode_cells",
+    "luma_u8",
     "sample_quadrants",
     "unit_grey",
 ]
@@ -237,6 +239,32 @@ def block_means_u8(g8: NDArray[np.uint8], f: int) -> NDArray[np.uint8]:  # pragm
         o = out[i]
         for j in range(w2):
             o[j] = (acc[j] + half) // n
+    return out
+
+
+@njit(nogil=True, error_model="numpy")
+def luma_u8(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:  # pragma: no cover
+    """Return the grey uint8 of the RGB uint8 image ``rgb`` (H, W, 3).
+
+    :math:`Y = 0.299 R + 0.587 G + 0.114 B` (the detector's Rec. 601 weights,
+    ``aruco._gray01``), rounded half up, in integers: ``(299 R + 587 G + 114 B + 500) // 1000``
+    (exact; :func:`imageform.geometry.tracking._luma_u8_numpy` is its NumPy twin).
+    """
+    hgt, wid = rgb.shape[0], rgb.shape[1]
+    out = np.empty((hgt, wid), dtype=np.uint8)
+    flat = rgb.reshape(hgt, 3 * wid)
+    for i in range(hgt):
+        row = flat[i]
+        o = out[i]
+        for j in range(wid):
+            s = (
+                np.int64(row[3 * j]) * 299
+                + np.int64(row[3 * j + 1]) * 587
+                + np.int64(row[3 * j + 2]) * 114
+                + 500
+            )
+            # s // 1000 for s <= 255500, exactly, without a division (tested)
+            o[j] = (s * 67109) >> 26
     return out
 
 

@@ -37,7 +37,9 @@ drawn in board coordinates on the live image.
   frame is searched at full resolution when that finds too few corners for a pose, or
   fewer than the last frame had (80 %) with a marker under 96 px among those read, and
   when the last detection's markers were under 48 px
-  (benchmarks/results/track-speed-2026-11-30h.md);
+  (benchmarks/results/track-speed-2026-11-30h.md). Such a frame in RGB uint8 (a video
+  reader's) is first made grey uint8 with the detector's luma weights, rounded (smaller
+  frames are read in RGB as before);
 - **no search in vain**: a checkerboard not found in a soft frame is sought on coarser
   copies of it (a board smeared by motion, :func:`~imageform.geometry.find_checkerboard`);
   after ``_SMEAR_PATIENCE`` frames in a row where that found nothing (a webcam's frames
@@ -132,6 +134,24 @@ def _marker_side(corners: NDArray[np.float64]) -> float:
         return 0.0
     e = np.roll(c, -1, axis=1) - c
     return float(np.hypot(e[..., 0], e[..., 1]).min())
+
+
+def _luma_u8_numpy(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:
+    """:func:`imageform._kernels.aruco.luma_u8`'s NumPy twin: the same codes."""
+    r, g, b = (rgb[..., k].astype(np.int32) for k in range(3))
+    return np.asarray((r * 299 + g * 587 + b * 114 + 500) // 1000, dtype=np.uint8)
+
+
+def _grey_u8(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:
+    """Return an RGB(A) uint8 frame's grey uint8: the detector's luma weights, rounded."""
+    from imageform._backend import use_numba
+
+    c = np.ascontiguousarray(rgb[..., :3])
+    if use_numba(c):
+        from imageform._kernels.aruco import luma_u8
+
+        return np.asarray(luma_u8(c))
+    return _luma_u8_numpy(c)
 
 
 def _missing(searched: str = "none", uv: NDArray[np.float64] | None = None) -> BoardPose:
@@ -309,7 +329,8 @@ class BoardTracker:
         """Return the factor by which a ChArUco frame's markers are read (1: not reduced).
 
         2 for a uint8 grey frame of a camera of at least ``_REDUCE_FROM`` pixels a side
-        (4K), unless the last detection's markers were under ``_REDUCE_MIN_MARKER`` pixels
+        (4K; an RGB uint8 one is made grey by :meth:`update` first), unless the last
+        detection's markers were under ``_REDUCE_MIN_MARKER`` pixels
         (twice that when halved): reading the markers of a 3840 x 2160 frame costs a
         quarter as much on its half (benchmarks/results/track-speed-2026-11-30h.md).
         """
@@ -466,6 +487,17 @@ class BoardTracker:
             raise InvalidInputError(f"expected a frame as an (H, W[, 3]) image, got {describe(a)}")
         h, w = a.shape[:2]
         self._frame = (h, w)
+        if (
+            self._charuco is not None
+            and max(h, w) >= _REDUCE_FROM
+            and a.dtype == np.uint8
+            and a.ndim == 3
+            and a.shape[2] in (3, 4)
+        ):
+            # a 4K RGB frame (imageform track's video reader) to its grey, rounded to uint8,
+            # for the markers' reading on its half (_reduction): the float grey of the frame
+            # alone costs more than the halved reading
+            a = _grey_u8(a)
         self._quiet = self._quiet + 1 if self._vain >= _SMEAR_PATIENCE else 0
         self._frame_vain = False
         self._spare = None
