@@ -1688,7 +1688,9 @@ def _fisheye_tried(
     if off is not None:
         return replace(checked, notes=[*checked.notes, f"{said}: it ran off ({off}): not kept"])
     if n_fish >= n_chk and e_fish <= _FISHEYE_ERROR * e_chk:
-        return replace(fish, notes=[*fish.notes, f"{said}: kept (the fisheye)"])
+        # the pinhole's run-off stays said (metrics.json's intrinsics.fallback)
+        ran = [m for m in checked.notes if m.startswith("the camera ran off")]
+        return replace(fish, notes=[*fish.notes, *ran, f"{said}: kept (the fisheye)"])
     return replace(checked, notes=[*checked.notes, f"{said}: not kept"])
 
 
