@@ -576,7 +576,7 @@ def test_refine_distortion_refuses_a_lens_it_cannot_refine() -> None:
 
     frames = [np.zeros((48, 64), np.uint8)] * 2
     K = np.array([[50.0, 0, 31.5], [0, 50.0, 23.5], [0, 0, 1]])
-    for lens in (KannalaBrandt(0.1, 0, 0, 0), BrownConrady(k1=0.1, k2=0.01)):
+    for lens in (KannalaBrandt(0.1, 0.01, 0, 0), BrownConrady(k1=0.1, k2=0.01)):
         with pytest.raises(InvalidInputError, match="k1 alone"):
             reconstruct_sequence(frames, K, lens, refine_distortion=True)
 
@@ -607,30 +607,43 @@ def test_pair_pose_fallback_registers_the_frames_pnp_cannot(
     assert np.all(sfm_scenes.rotation_errors_deg(rec.R[reg], [truth[i] for i in reg]) < 2.0)
 
 
-def _fake_model(n: int, reg: int, f: float, k1: float, notes: tuple[str, ...] = ()) -> Any:
-    """A Reconstruction of ``n`` frames, ``reg`` registered, with the camera f, k1."""
-    from imageform.geometry import BrownConrady
+def _fake_model(
+    n: int,
+    reg: int,
+    f: float,
+    k1: float,
+    notes: tuple[str, ...] = (),
+    fisheye: bool = False,
+    error: float = 0.5,
+) -> Any:
+    """A Reconstruction of ``n`` frames, ``reg`` registered, with the camera f, k1
+    (``fisheye``: ``KannalaBrandt(k1)``), its median reprojection error ``error``."""
+    from imageform.geometry import BrownConrady, KannalaBrandt
     from imageform.geometry.sfm import Reconstruction
 
     R = np.full((n, 3, 3), np.nan)
     t = np.full((n, 3), np.nan)
     R[:reg], t[:reg] = np.eye(3), 0.0
     K = np.array([[f, 0, 99.5], [0, f, 99.5], [0, 0, 1]])
+    lens = KannalaBrandt(k1=k1) if fisheye else BrownConrady(k1=k1) if k1 else None
     return Reconstruction(
         R, t, np.arange(n) < reg, np.zeros((0, 3)), np.zeros((0, 3), np.uint8),
-        np.zeros(0, np.int64), np.zeros(n), list(notes), K=K,
-        distortion=BrownConrady(k1=k1) if k1 else None,
+        np.zeros(0, np.int64), np.zeros(n), list(notes), np.full(9, error), K=K,
+        distortion=lens,
     )  # fmt: skip
 
 
-def _scripted(monkeypatch: pytest.MonkeyPatch, models: dict[tuple[bool, bool], Any]) -> list:
-    """``reconstruct_sequence``'s models by (refine_focal, refine_distortion), no SfM run."""
-    from imageform.geometry import sfm
+def _scripted(monkeypatch: pytest.MonkeyPatch, models: dict[tuple[bool, ...], Any]) -> list:
+    """``reconstruct_sequence``'s models by (refine_focal, refine_distortion), no SfM run;
+    the fisheye's by (refine_focal, refine_distortion, True)."""
+    from imageform.geometry import KannalaBrandt, sfm
 
-    calls: list[tuple[bool, bool]] = []
+    calls: list[tuple[bool, ...]] = []
 
     def one_model(images: Any, K: Any, distortion: Any, kw: dict) -> Any:
-        key = (kw["refine_focal"], kw["refine_distortion"])
+        key: tuple[bool, ...] = (kw["refine_focal"], kw["refine_distortion"])
+        if isinstance(distortion, KannalaBrandt):
+            key = (*key, True)
         calls.append(key)
         return models[key]
 
@@ -677,8 +690,10 @@ def test_a_camera_that_runs_off_falls_back(monkeypatch: pytest.MonkeyPatch) -> N
     K = np.array([[537.6, 0, 99.5], [0, 537.6, 99.5], [0, 0, 1]])
     frames = [np.zeros((200, 200), np.uint8)] * 13
     ran = _fake_model(13, 13, 2487.0, -17.8)
+    fish = _fake_model(13, 12, 199.0, 0.0, fisheye=True)  # tried, fewer frames: not kept
     calls = _scripted(
-        monkeypatch, {(True, True): ran, (True, False): _fake_model(13, 13, 520.0, 0)}
+        monkeypatch,
+        {(True, True): ran, (True, False): _fake_model(13, 13, 520.0, 0), (True, True, True): fish},
     )
     rec = reconstruct_sequence(frames, K, refine_focal=True, refine_distortion=True)
     assert rec.K is not None and rec.K[0, 0] == 520.0 and rec.distortion is None
@@ -691,10 +706,12 @@ def test_a_camera_that_runs_off_falls_back(monkeypatch: pytest.MonkeyPatch) -> N
             (True, True): ran,
             (True, False): _fake_model(13, 13, 2000.0, 0),
             (False, False): _fake_model(13, 13, 537.6, 0),
+            (True, True, True): fish,
         },
     )
     rec = reconstruct_sequence(frames, K, refine_focal=True, refine_distortion=True)
-    assert calls[-1] == (False, False) and rec.K is not None and rec.K[0, 0] == 537.6
+    assert (False, False) in calls and calls[-1] == (True, True, True)
+    assert rec.K is not None and rec.K[0, 0] == 537.6
     assert any("f and k1 held at the ones given" in n for n in rec.notes), rec.notes
 
 
@@ -719,3 +736,94 @@ def sfm_features(xy: np.ndarray) -> Any:
 
     n = xy.shape[0]
     return Features(xy, np.zeros((n, 128), np.float32), np.ones(n), np.zeros(n))
+
+
+def test_the_equidistant_lens_and_its_derivatives() -> None:
+    """``_equidistant`` is ``KannalaBrandt(k1)`` on pinhole pixels; its map and derivatives
+    by f and k1 are the numerical ones."""
+    from imageform.geometry import KannalaBrandt
+    from imageform.geometry.sfm import _equidistant
+
+    K = np.array([[200.0, 0, 220.0], [0, 201.0, 225.0], [0, 0, 1]])
+    rng = np.random.default_rng(1)
+    x = rng.uniform(-3.0, 3.0, (50, 2))  # up to 77 degrees off the axis
+    x[0] = 0.0  # the centre
+    proj = x @ K[:2, :2].T + K[:2, 2]
+    k1 = -0.05
+    u, A, du_df, du_dk = _equidistant(K, k1, proj)
+    want = np.asarray(KannalaBrandt(k1=k1).distort(x)) @ K[:2, :2].T + K[:2, 2]
+    np.testing.assert_allclose(u, want, atol=1e-9)
+    h = 1e-5
+    for j in range(2):
+        e = np.zeros(2)
+        e[j] = h
+        num = (_equidistant(K, k1, proj + e)[0] - _equidistant(K, k1, proj - e)[0]) / (2 * h)
+        np.testing.assert_allclose(A[:, :, j], num, atol=1e-5)
+    Kf = K.copy()
+    Kf[:2, :2] *= 1 + h / K[0, 0]
+    proj_f = x @ Kf[:2, :2].T + Kf[:2, 2]  # the same rays, the focal length moved
+    np.testing.assert_allclose(du_df, (_equidistant(Kf, k1, proj_f)[0] - u) / h, atol=1e-4)
+    num_k = (_equidistant(K, k1 + h, proj)[0] - _equidistant(K, k1 - h, proj)[0]) / (2 * h)
+    np.testing.assert_allclose(du_dk, num_k, atol=1e-5)
+
+
+def test_the_fisheye_is_tried_where_simple_radial_runs_off(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The C3VD case: SIMPLE_RADIAL ran off, f alone held; the equidistant fisheye, as many
+    frames and no more error, is kept and said; one that registers fewer is not; a lens
+    given is never swapped for the fisheye."""
+    K = np.array([[537.6, 0, 99.5], [0, 537.6, 99.5], [0, 0, 1]])
+    frames = [np.zeros((200, 200), np.uint8)] * 13
+    ran = _fake_model(13, 13, 2487.0, -17.8)
+    alone = _fake_model(13, 13, 362.0, 0)
+    fish = _fake_model(13, 13, 199.0, 0.0, fisheye=True, error=0.5)
+    calls = _scripted(
+        monkeypatch, {(True, True): ran, (True, False): alone, (True, True, True): fish}
+    )
+    rec = reconstruct_sequence(frames, K, refine_focal=True, refine_distortion=True)
+    assert calls[-1] == (True, True, True)
+    assert rec.K is not None and rec.K[0, 0] == 199.0
+    assert type(rec.distortion).__name__ == "KannalaBrandt"
+    note = next(n for n in rec.notes if n.startswith("the fisheye tried"))
+    assert "SIMPLE_RADIAL ran off" in note and note.endswith("kept (the fisheye)"), note
+    # the fisheye starts from a 140 degree field across the larger side: 200 / 2.443 px
+    assert "f from 81.9 px" in note, note
+    # fewer frames: the f-alone model stays
+    fewer = _fake_model(13, 12, 199.0, 0.0, fisheye=True)
+    _scripted(monkeypatch, {(True, True): ran, (True, False): alone, (True, True, True): fewer})
+    rec = reconstruct_sequence(frames, K, refine_focal=True, refine_distortion=True)
+    assert rec.K is not None and rec.K[0, 0] == 362.0 and rec.distortion is None
+    assert any(n.startswith("the fisheye tried") and n.endswith("not kept") for n in rec.notes)
+    # a term that stands (no run-off, k1 0): the fisheye is not tried
+    calls = _scripted(monkeypatch, {(True, True): _fake_model(13, 13, 530.0, 0.01)})
+    rec = reconstruct_sequence(frames, K, refine_focal=True, refine_distortion=True)
+    assert calls == [(True, True)]
+
+
+def test_a_fisheye_room_is_found_equidistant() -> None:
+    """A 146 degree equidistant fisheye (f 250 px on 640 x 480, ``KannalaBrandt()``) from
+    COLMAP's guess 768 px: SIMPLE_RADIAL ends at f 463 px, k1 -0.31 (73 % of its bound);
+    the fisheye tried is kept, f within 2 % (measured 250.3 px), the path within 0.5 %
+    (0.02 %), the median error below SIMPLE_RADIAL's (0.20 against 0.44 px)."""
+    from imageform.geometry import KannalaBrandt
+
+    K = np.array([[250.0, 0, 319.5], [0, 250.0, 239.5], [0, 0, 1]])
+    truth = sfm_scenes.poses(12)
+    rng = np.random.default_rng(5)
+    frames = [
+        sfm_scenes.render(K, p, (640, 480), noise=1.5, rng=rng, distortion=KannalaBrandt())
+        for p in truth
+    ]
+    K0 = K.copy()
+    K0[0, 0] = K0[1, 1] = 768.0
+    rec = reconstruct_sequence(
+        frames, K0, max_features=2000, refine_focal=True, refine_distortion=True
+    )
+    assert rec.registered.all(), rec.notes
+    assert isinstance(rec.distortion, KannalaBrandt), rec.notes
+    assert rec.K is not None and rec.K[0, 0] == pytest.approx(250.0, rel=0.02)
+    assert any(n.endswith("kept (the fisheye)") for n in rec.notes), rec.notes
+    C_true = np.array([-R.T @ t for R, t in truth])
+    C = np.array([-R.T @ t for R, t in zip(rec.R, rec.t, strict=True)])
+    assert sfm_scenes.align_rms(C, C_true) < 0.005

@@ -329,7 +329,9 @@ class Reconstruction:
     distortion : distortion model or None
         The lens of the final bundle adjustment: the one given, or with
         ``refine_distortion`` its radial term refined (``BrownConrady(k1)``, COLMAP's
-        ``SIMPLE_RADIAL``). With ``K``, the camera to reproject the points into the frames.
+        ``SIMPLE_RADIAL``, or ``KannalaBrandt(k1)``, the equidistant fisheye with one term,
+        where that was tried and kept). With ``K``, the camera to reproject the points into
+        the frames.
     """
 
     R: F64
@@ -521,6 +523,38 @@ def _radial(K: F64, k1: float, proj: F64) -> tuple[F64, F64, F64, F64]:
     return u, A, du_df, du_dk
 
 
+def _equidistant(K: F64, k1: float, proj: F64) -> tuple[F64, F64, F64, F64]:
+    r"""Apply the equidistant fisheye with one Kannala-Brandt term to pinhole pixels ``proj``.
+
+    .. math:: x = K_2^{-1} (p - c), \quad \theta = \arctan \|x\|, \quad
+              \theta_d = \theta (1 + k_1 \theta^2), \quad
+              u = c + K_2\, \frac{\theta_d}{\|x\|}\, x
+
+    (Kannala & Brandt 2006, IEEE TPAMI 28(8), eq. (6), its ``k2 ... k4`` zero; ``k1 = 0``:
+    the equidistant lens :math:`r_d = f \theta`; ``KannalaBrandt(k1)``). Returns what
+    :func:`_radial` does: the image pixels, the local map :math:`A = K_2 J_d K_2^{-1}`,
+    :math:`J_d = s I + (\theta_d' / (1 + r^2) - s)\, x x^T / r^2` (:math:`s = \theta_d / r`,
+    :math:`\theta_d' = 1 + 3 k_1 \theta^2`), and the derivatives of ``u`` by :math:`f_x`
+    and by :math:`k_1`, :math:`K_2 (\theta^3 / r)\, x`.
+    """
+    k2 = K[:2, :2]
+    c = K[:2, 2]
+    x = (proj - c) @ np.linalg.inv(k2).T
+    r = np.sqrt(np.sum(x * x, axis=1))
+    small = ~(r > 1e-9)
+    rs = np.where(small, 1.0, r)
+    th = np.arctan(r)
+    td = th * (1.0 + k1 * th * th)
+    s = np.where(small, 1.0, td / rs)
+    u = c + (x * s[:, None]) @ k2.T
+    coef = np.where(small, 0.0, ((1.0 + 3.0 * k1 * th * th) / (1.0 + r * r) - s) / rs**2)
+    jd = s[:, None, None] * np.eye(2) + coef[:, None, None] * x[:, :, None] * x[:, None, :]
+    A = k2 @ jd @ np.linalg.inv(k2)
+    du_df = (u - c) / K[0, 0]
+    du_dk = (x * np.where(small, 0.0, th**3 / rs)[:, None]) @ k2.T
+    return u, A, du_df, du_dk
+
+
 #: The largest radial term :func:`_schur_lm` takes, as its displacement at the farthest
 #: view, :math:`|k_1| r_{max}^2`: beyond 1/3 a barrel term folds the image back on itself
 #: (:math:`d(r (1 + k_1 r^2)) / dr = 1 + 3 k_1 r^2`), and well before it the term trades
@@ -645,6 +679,7 @@ def _schur_lm(
     focal: bool = False,
     radial: float | None = None,
     refine_radial: bool = True,
+    fisheye: bool = False,
 ) -> tuple[F64, F64, F64, F64, float]:
     r"""Levenberg-Marquardt on the reprojection error, the points eliminated (Schur complement).
 
@@ -679,7 +714,9 @@ def _schur_lm(
     and its one radial term is refined, one for every camera (``A`` must be None: the lens
     is the model's, its local map recomputed at each step); bounded by
     :math:`|k_1| r_{max}^2 \le 0.3`, :math:`r_{max}` the farthest view's normalised radius
-    (``refine_radial`` False: the lens held at ``radial``).
+    (``refine_radial`` False: the lens held at ``radial``). ``fisheye``: the lens is the
+    equidistant fisheye with one Kannala-Brandt term instead (:func:`_equidistant`), the
+    same bound on :math:`|k_1| \theta_{max}^2`.
     Each refined intrinsic adds one row and column to the reduced camera system (its
     coupling with each camera's 6 parameters and with each point's 3, summed in NumPy
     beside the kernels). Returns ``R``, ``t``, ``X``, ``K`` (the refined camera matrix;
@@ -733,7 +770,7 @@ def _schur_lm(
         lensmap = A
         Ji = np.zeros((M, 2, ni))
         if radial is not None:
-            proj, lensmap, du_df, du_dk = _radial(K, k1, proj)
+            proj, lensmap, du_df, du_dk = (_equidistant if fisheye else _radial)(K, k1, proj)
             if focal:
                 Ji[:, :, 0] = du_df
             if refine_k1:
@@ -1194,24 +1231,39 @@ def _undistorted(xy: F64, k: F64, distortion: DistortionModel | None) -> F64:
     return np.asarray(und * np.diag(k)[:2] + k[:2, 2], np.float64)
 
 
-def _simple_radial(k1: float) -> DistortionModel:
-    """COLMAP's ``SIMPLE_RADIAL`` lens as imageform's: ``BrownConrady(k1)``."""
-    from imageform.geometry.distortion import BrownConrady
+def _simple_radial(k1: float, fisheye: bool = False) -> DistortionModel:
+    """COLMAP's ``SIMPLE_RADIAL`` lens as imageform's: ``BrownConrady(k1)``.
 
-    return BrownConrady(k1=float(k1))
+    ``fisheye``: the equidistant fisheye with one term, ``KannalaBrandt(k1)``.
+    """
+    from imageform.geometry.distortion import BrownConrady, KannalaBrandt
+
+    return KannalaBrandt(k1=float(k1)) if fisheye else BrownConrady(k1=float(k1))
+
+
+def _is_fisheye(distortion: DistortionModel | None) -> bool:
+    """Whether the lens is a Kannala-Brandt fisheye."""
+    from imageform.geometry.distortion import KannalaBrandt
+
+    return isinstance(distortion, KannalaBrandt)
 
 
 def _radial_start(distortion: DistortionModel | None) -> float:
-    """Return the radial term ``refine_distortion`` starts from: the lens's k1, 0 for none."""
-    from imageform.geometry.distortion import BrownConrady
+    """Return the radial term ``refine_distortion`` starts from: the lens's k1, 0 for none.
+
+    ``BrownConrady`` with k1 alone (COLMAP's ``SIMPLE_RADIAL``), or ``KannalaBrandt`` with
+    k1 alone (the equidistant fisheye and one term: :func:`_fisheye_tried`).
+    """
+    from imageform.geometry.distortion import BrownConrady, KannalaBrandt
 
     if distortion is None:
         return 0.0
-    if isinstance(distortion, BrownConrady) and not any(distortion.coeffs[1:]):
+    if isinstance(distortion, BrownConrady | KannalaBrandt) and not any(distortion.coeffs[1:]):
         return float(distortion.k1)
     raise InvalidInputError(
-        "refine_distortion refines one radial term k1 (COLMAP's SIMPLE_RADIAL): expected no "
-        f"distortion or BrownConrady with k1 alone, got {distortion!r}"
+        "refine_distortion refines one radial term k1 (COLMAP's SIMPLE_RADIAL, or the "
+        "equidistant fisheye's): expected no distortion, or BrownConrady or KannalaBrandt "
+        f"with k1 alone, got {distortion!r}"
     )
 
 
@@ -1305,6 +1357,19 @@ def reconstruct_sequence(
         and k1 held; when the term was kept and frames are left out, the one with k1 held
         is returned if it registers more frames. A note says so.
 
+        Without a lens given (``distortion`` None) and with ``refine_focal``, where the
+        camera ran off, or its term is barrel and at half its bound or more on the
+        keypoints, the equidistant fisheye is tried too, one more reconstruction from
+        ``KannalaBrandt()`` (:math:`r_d = f \theta`, :math:`\theta` the ray's angle to the
+        axis; Kannala & Brandt 2006, eq. (6)), f refined from the one whose field across
+        the image's larger side is 140 degrees (or the one given, when shorter) and one
+        Kannala-Brandt term :math:`\theta_d = \theta (1 + k_1 \theta^2)` refined and kept
+        by the same 2 % test; it is returned (``distortion`` a ``KannalaBrandt`` with k1
+        alone) when it registers as many frames or more, its median reprojection error at
+        most 5 % above, and its camera did not run off; a note says what was tried and
+        chosen. ``distortion`` given as ``KannalaBrandt`` with k1 alone: that lens's term
+        is the one refined.
+
     Returns
     -------
     Reconstruction
@@ -1340,7 +1405,21 @@ def reconstruct_sequence(
     best = _self_calibrated(images, K, distortion, kw)
     if not refine_distortion:
         return best
-    return _radial_checked(images, K, distortion, kw, best)
+    f_given = float(np.asarray(K, np.float64)[0, 0])
+    feats = cache.get("feats")
+    why = _ran_off(best, f_given, feats)
+    checked = _radial_checked(images, K, distortion, kw, best)
+    if distortion is not None or not refine_focal:
+        return checked
+    if why is None:  # a strong barrel term, at half its bound or more: a fisheye's sign
+        k1 = _radial_start(best.distortion)
+        share = 0.0 if feats is None else _radial_share(best, feats)
+        if not (k1 < 0 and share >= _FISHEYE_HINT) or checked is not best:
+            return checked
+        why = f"k1 = {k1:.3f}, {100 * share:.0f} % of its bound on the keypoints"
+    else:
+        why = f"SIMPLE_RADIAL ran off: {why}"
+    return _fisheye_tried(images, K, kw, checked, why)
 
 
 def _self_calibrated(
@@ -1434,6 +1513,22 @@ _RUNOFF_BOUND = 0.9
 _RUNOFF_FACTOR = 3.0
 
 
+def _radial_share(rec: Reconstruction, feats: Sequence[Features]) -> float:
+    """Return the radial term's share of its bound, :math:`|k_1| r_{max}^2 / 0.3`.
+
+    ``r_max``: the farthest keypoint's normalised radius in the registered frames (0
+    without a term).
+    """
+    if rec.K is None or rec.distortion is None:
+        return 0.0
+    f = float(rec.K[0, 0])
+    k1 = _radial_start(rec.distortion)
+    reg = np.flatnonzero(rec.registered).tolist()
+    xy = np.concatenate([feats[i].xy for i in reg]) if reg else np.zeros((0, 2))
+    r2 = float(np.max(np.sum(((xy - rec.K[:2, 2]) / f) ** 2, axis=1), initial=0.0))
+    return abs(k1) * r2 / _RADIAL_MAX
+
+
 def _ran_off(rec: Reconstruction, f_given: float, feats: Sequence[Features] | None) -> str | None:
     """Why the camera of ``rec`` ran off (k1 at its bound, f moved a factor 3), or None.
 
@@ -1450,13 +1545,10 @@ def _ran_off(rec: Reconstruction, f_given: float, feats: Sequence[Features] | No
     k1 = _radial_start(rec.distortion) if rec.distortion is not None else 0.0
     why: list[str] = []
     if feats is not None and k1 != 0.0:
-        reg = np.flatnonzero(rec.registered).tolist()
-        xy = np.concatenate([feats[i].xy for i in reg]) if reg else np.zeros((0, 2))
-        r2 = float(np.max(np.sum(((xy - rec.K[:2, 2]) / f) ** 2, axis=1), initial=0.0))
-        share = abs(k1) * r2 / _RADIAL_MAX
+        share = _radial_share(rec, feats)
         if share >= _RUNOFF_BOUND:
             why.append(
-                f"k1 = {k1:.3f} at its bound (|k1| r_max^2 = {abs(k1) * r2:.3f}, "
+                f"k1 = {k1:.3f} at its bound (|k1| r_max^2 = {share * _RADIAL_MAX:.3f}, "
                 f"{_RADIAL_MAX:g} allowed)"
             )
     if max(f / f_given, f_given / f) >= _RUNOFF_FACTOR:
@@ -1533,6 +1625,73 @@ def _radial_checked(
         f"{int(fixed.registered.sum())} of {n} frames; calibrate the camera and give it"
     )
     return replace(fixed, notes=[*fixed.notes, note])
+
+
+#: The fisheye tried when ``SIMPLE_RADIAL`` ran off starts from the focal length whose
+#: equidistant field across the image's larger side is this many degrees (an endoscope's
+#: 140 to 170), or from the one given when that is shorter (:func:`_fisheye_tried`)
+_FISHEYE_FIELD_DEG = 140.0
+
+#: The fisheye is tried where ``SIMPLE_RADIAL``'s barrel term reached this share of its
+#: bound on the keypoints (:math:`|k_1| r_{max}^2 \ge 0.5 \cdot 0.3`), and kept where its
+#: median reprojection error is at most this factor of the other's (the 2 px filter leaves
+#: both within 0.01 px on the C3VD frames: a tie, and the pinhole failed its own check)
+_FISHEYE_HINT = 0.5
+_FISHEYE_ERROR = 1.05
+
+
+def _fisheye_tried(
+    images: Sequence[ArrayLike],
+    K: ArrayLike,
+    kw: dict[str, Any],
+    checked: Reconstruction,
+    why: str,
+) -> Reconstruction:
+    r"""Try the equidistant fisheye where COLMAP's ``SIMPLE_RADIAL`` ran off (no lens given).
+
+    An endoscope's lens (140 to 170 degrees) is no pinhole with one radial term: f and k1
+    slide along their valley (:func:`_ran_off`). One more reconstruction with the
+    equidistant fisheye, :math:`r_d = f \theta` (``KannalaBrandt()``), f refined, and one
+    Kannala-Brandt term :math:`k_1` refined and kept only where it lowers the squared
+    reprojection error by 2 % (``choose_lens``); kept when it registers as many frames as
+    ``checked`` (the model :func:`_radial_checked` returned) or more, its median
+    reprojection error (image pixels) at most 5 % above, and its own camera did not run
+    off (f a factor 3 from where it started, k1 at 90 % of its bound). Also tried where
+    ``SIMPLE_RADIAL`` did not run off but its term is barrel and at half its bound or more
+    on the keypoints (``_FISHEYE_HINT``). ``why``: what made it tried, for the note.
+    """
+    from imageform.geometry.distortion import KannalaBrandt
+
+    k_fish = np.array(K, np.float64)
+    h, w = np.asarray(images[0]).shape[:2]
+    f_field = max(w, h) / np.radians(_FISHEYE_FIELD_DEG)  # r_d = f theta at half the field
+    k_fish[:2, :2] *= min(1.0, f_field / float(k_fish[0, 0]))
+    f_start = float(k_fish[0, 0])
+    fish_kw = {**kw, "radial_given": 0.0}
+    try:
+        fish = _self_calibrated(images, k_fish, KannalaBrandt(), fish_kw)
+    except DegenerateConfigurationError:
+        return replace(checked, notes=[*checked.notes, "the fisheye tried: no model: not kept"])
+    n = len(images)
+    n_chk, n_fish = int(checked.registered.sum()), int(fish.registered.sum())
+    e_chk = float(np.median(checked.residuals_px)) if checked.residuals_px.size else np.inf
+    e_fish = float(np.median(fish.residuals_px)) if fish.residuals_px.size else np.inf
+    assert fish.K is not None and checked.K is not None
+    k1 = _radial_start(fish.distortion)
+    said = (
+        f"the fisheye tried ({why}; equidistant, Kannala-Brandt k1 = {k1:.4f}, f from "
+        f"{f_start:.1f} px): f = {float(fish.K[0, 0]):.1f} px, {n_fish} of {n} frames, "
+        f"median reprojection error {e_fish:.2f} px; against f = {float(checked.K[0, 0]):.1f}"
+        f" px, {n_chk} of {n} frames, {e_chk:.2f} px"
+    )
+    off = _ran_off(fish, f_start, kw["cache"].get("feats"))
+    if off is not None:
+        return replace(checked, notes=[*checked.notes, f"{said}: it ran off ({off}): not kept"])
+    if n_fish >= n_chk and e_fish <= _FISHEYE_ERROR * e_chk:
+        # the pinhole's run-off stays said (metrics.json's intrinsics.fallback)
+        ran = [m for m in checked.notes if m.startswith("the camera ran off")]
+        return replace(fish, notes=[*fish.notes, *ran, f"{said}: kept (the fisheye)"])
+    return replace(checked, notes=[*checked.notes, f"{said}: not kept"])
 
 
 #: With ``refine_focal``: a focal length that moves by more than this share starts the
@@ -1627,9 +1786,10 @@ def _reconstruct(
     feats = cache["feats"]
     # refine_distortion: COLMAP's SIMPLE_RADIAL lens, its k1 from the one given (0: none)
     radial_k1: float | None = None
+    fisheye = _is_fisheye(distortion)
     if refine_distortion:
         radial_k1 = _radial_start(distortion)
-        distortion = _simple_radial(radial_k1)
+        distortion = _simple_radial(radial_k1, fisheye)
     raw = np.concatenate([feat.xy for feat in feats]) if feats else np.zeros((0, 2))
     # undistorted (ideal pinhole) pixels of every keypoint
     ideal: list[F64] = [_undistorted(feat.xy, k, distortion) for feat in feats]
@@ -1828,7 +1988,7 @@ def _reconstruct(
         """Undistort every keypoint again with ``k`` and the radial term ``k1`` (its lens)."""
         nonlocal distortion, radial_k1, all_A, all_mag, all_uv, o_uv, o_A
         radial_k1 = k1
-        distortion = _simple_radial(k1)
+        distortion = _simple_radial(k1, fisheye)
         ideal[:] = [_undistorted(feat.xy, k, distortion) for feat in feats]
         all_A = np.concatenate([_image_jacobian(k, distortion, u) for u in ideal])
         all_mag = _magnification(all_A)
@@ -1872,6 +2032,7 @@ def _reconstruct(
             A=None if distortion is None or radial else o_A[ids],
             focal=focal,
             radial=radial_k1 if radial else None,
+            fisheye=fisheye,
         )
         Rs[registered], ts[registered] = Rn[registered], tn[registered]
         P[pts] = Xn
@@ -1907,13 +2068,13 @@ def _reconstruct(
 
         def sse(K_: F64, k1: float, R_: F64, t_: F64, X_: F64) -> float:
             proj, _ = _project_obs(K_, R_[fr], t_[fr], X_[pslot])
-            d = _radial(K_, k1, proj)[0] - uv
+            d = (_equidistant if fisheye else _radial)(K_, k1, proj)[0] - uv
             return float(np.nansum(d * d))
 
         found = sse(k, radial_k1, R0, t0, P[pts])
         Rn, tn, Xn, Kn, _ = _schur_lm(
             k, R0, t0, P[pts], fr, pslot, uv, fixed, 0.0, 50,
-            focal=refine_focal, radial=k1_given, refine_radial=False,
+            focal=refine_focal, radial=k1_given, refine_radial=False, fisheye=fisheye,
         )  # fmt: skip
         held = sse(Kn, k1_given, Rn, tn, Xn)
         gain = 1.0 - found / max(held, 1e-300)

@@ -78,7 +78,10 @@ class ReconstructOptions(Options):
         help="Refine one radial distortion term k1 shared by every frame (COLMAP's "
         "SIMPLE_RADIAL: u = c + f (1 + k1 r^2) x) in the bundle adjustments, from the "
         "--camera file's (no distortion, or k1 alone) or 0 with --focal; without a camera "
-        "file or --focal it is always refined. The camera found is written to camera.toml.",
+        "file or --focal it is always refined. Where it runs off or its barrel term is "
+        "strong (a fisheye), the equidistant fisheye (Kannala-Brandt, f and one term k1) is "
+        "tried and kept when it registers as many frames at most 5 % above the median "
+        "reprojection error. The camera found is written to camera.toml.",
     )
     max_features: int = option(
         4000, help="SIFT keypoints per frame (the strongest).", minimum=8, maximum=1_000_000
@@ -301,8 +304,10 @@ def _camera_note(intr: dict[str, Any], first: Path | None) -> str:
     )
     if intr.get("distortion_refined"):
         k1 = intr["k1"]
+        model = intr.get("model", "SIMPLE_RADIAL")
+        what = "the equidistant fisheye, Kannala-Brandt" if model == "KANNALA_BRANDT" else model
         refined += (", " if refined else "; refined by bundle adjustment to ") + (
-            f"k1 = {k1:.4f} (SIMPLE_RADIAL)"
+            f"k1 = {k1:.4f} ({what})"
         )
     if intr["source"] == "camera file":
         return f"the camera file's f = {f0:.1f} px{refined}"
@@ -459,12 +464,22 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     lens = rec.distortion if refine_lens else distortion
     intrinsics["distortion_refined"] = refine_lens
     intrinsics["k1"] = float(getattr(lens, "k1", 0.0)) if refine_lens else None
+    # the lens model refined: COLMAP's SIMPLE_RADIAL, or the equidistant fisheye with one
+    # Kannala-Brandt term where SIMPLE_RADIAL ran off and the fisheye fits (reconstruct_sequence)
+    intrinsics["model"] = (
+        ("KANNALA_BRANDT" if type(lens).__name__ == "KannalaBrandt" else "SIMPLE_RADIAL")
+        if refine_lens
+        else None
+    )
     # the radial term's check: the camera ran off (a fisheye) or the term cost frames, and
     # what was held instead (reconstruct_sequence's note); None when the term stood
     intrinsics["fallback"] = next(
         (n for n in rec.notes if n.startswith(("the camera ran off", "the radial term cost"))),
         None,
     )
+    # the equidistant fisheye tried (SIMPLE_RADIAL ran off, or its barrel term was strong):
+    # what it found and whether it was kept; None when not tried
+    intrinsics["fisheye"] = next((n for n in rec.notes if n.startswith("the fisheye tried")), None)
     del images
     folder = run.folder(out)
     t2 = time.perf_counter()
