@@ -292,13 +292,15 @@ def test_a_command_writing_a_read_only_format_names_no_temporary_file(
     tmp_path: Path, suffix: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """It said "write .out.heic.21644-f323a388.part.png, .jpg or .tif" (the atomic write's
-    temporary name)."""
+    temporary name); refused before anything is read now, saying the format is read only."""
     src = tmp_path / "in.png"
     write_image(src, RGB)
     out = tmp_path / f"out{suffix}"
     assert main(["cvd", str(src), "--type", "deutan", "-o", str(out)]) == 1
     err = capsys.readouterr().err
-    assert "does not write it; write a .png, .jpg or .tif file" in err and ".part" not in err
+    name = {".webp": "WebP", ".heic": "HEIF"}[suffix]
+    assert f"cvd writes an image: imageform reads {name} but does not write it" in err
+    assert ".part" not in err and err.count("\n") == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.png"]
 
 

@@ -88,6 +88,20 @@ def _check_data_suffix(wf: Workflow, out: Path) -> None:
             f"{wf.name} writes a {kinds} file: give -o a {kinds} name, not {describe(out.name, 60)}"
         )
     kinds = ", ".join(wf.suffixes[:-1]) + f" or {wf.suffixes[-1]}"
+    if out.suffix.lower() not in IMAGE_SUFFIXES:  # a format imageform reads, never writes?
+        from imageform.errors import ImageformError
+        from imageform.io import image_format
+
+        try:
+            fmt = image_format(out)
+        except ImageformError:
+            fmt = None
+        if fmt is not None:
+            name = {"heif": "HEIF", "webp": "WebP"}.get(fmt, fmt.upper())
+            raise InvalidInputError(
+                f"{wf.name} writes an image: imageform reads {name} but does not write it; "
+                f"give -o a {kinds} name, not {describe(out.name, 60)}"
+            )
     raise InvalidInputError(
         f"{wf.name} writes an image: give -o a {kinds} name, not {describe(out.name, 60)}"
     )
