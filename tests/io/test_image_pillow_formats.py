@@ -298,7 +298,7 @@ def test_a_command_writing_a_read_only_format_names_no_temporary_file(
     out = tmp_path / f"out{suffix}"
     assert main(["cvd", str(src), "--type", "deutan", "-o", str(out)]) == 1
     err = capsys.readouterr().err
-    assert "does not write it; write a .png, .jpg or .tif file" in err and ".part" not in err
+    assert "does not write it; write a .png, .jpg, .tif, .pgm or .ppm file" in err and ".part" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.png"]
 
 
