@@ -50,7 +50,9 @@ ICC profile (BITMAPV5HEADER) is its declared colour space. Netpbm (``.pbm``, ``.
 ``.ppm``, ``.pnm``, ``.pam``: P1-P7, plain or binary) is read by imageform's own reader
 (:mod:`imageform.io._netpbm`): maxval 255 as uint8, 65535 as uint16, a bilevel image as 0/255,
 any other maxval scaled to the full range of 8 bits (below 256) or 16, ``round(v / maxval *
-(2**n - 1))``, as Pillow and imageio read it (the format's samples mean ``v / maxval``).
+(2**n - 1))``, as Pillow and imageio read it (the format's samples mean ``v / maxval``;
+unlike a 12-bit TIFF's DN, a camera's PGM of maxval 4095 comes scaled: ``v * 4095 / 65535``
+gives its stored numbers back).
 A grey ``.pgm`` or RGB ``.ppm`` is written (binary, maxval 255 or 65535, no profile); the
 others are not (write PNG).
 DICOM (``.dcm``, ``.dicom``, or any file with ``DICM`` at byte 128) is read through pydicom
