@@ -275,7 +275,7 @@ DATA_OUTPUTS = [
     (name, wf.suffixes)
     for name, wf in WORKFLOWS.items()
     if wf.output is not None
-    and set(wf.suffixes) - {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy"}
+    and set(wf.suffixes) - {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy", ".pgm", ".ppm"}
 ]
 
 
@@ -306,7 +306,7 @@ IMAGE_OUTPUTS = [
     for name, wf in WORKFLOWS.items()
     if wf.output is not None
     and not wf.output.folder
-    and not set(wf.suffixes) - {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy"}
+    and not set(wf.suffixes) - {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy", ".pgm", ".ppm"}
 ]
 
 

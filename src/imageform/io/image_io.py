@@ -1,4 +1,6 @@
-"""The one image reader and writer: PNG, JPEG, TIFF, ``.npy``; HEIF, WebP, BMP, GIF, DICOM read.
+"""The one image reader and writer: PNG, JPEG, TIFF, ``.npy``, PGM/PPM; more formats read.
+
+HEIF, WebP, BMP, GIF, Netpbm (PBM, PAM too), TGA, QOI and DICOM are read, not written.
 
 One rule for every format:
 
@@ -43,7 +45,16 @@ libheif (the ``heif`` extra, pillow-heif): 8 bits as uint8, 10 and 12 bits as ui
 the full range as a 16-bit PNG; the container's rotation and mirroring are applied by libheif
 (HEIF's own orientation, which the EXIF tag in such files only repeats). It is not written.
 WebP (still, lossy or lossless), BMP (1 to 32 bits, palette, RLE, bottom-up or top-down) and a
-single-frame GIF are read through Pillow, as uint8; they are not written either (write PNG).
+single-frame GIF are read through Pillow, as uint8, and so are TGA and QOI; a BMP's embedded
+ICC profile (BITMAPV5HEADER) is its declared colour space. Netpbm (``.pbm``, ``.pgm``,
+``.ppm``, ``.pnm``, ``.pam``: P1-P7, plain or binary) is read by imageform's own reader
+(:mod:`imageform.io._netpbm`): maxval 255 as uint8, 65535 as uint16, a bilevel image as 0/255,
+any other maxval scaled to the full range of 8 bits (below 256) or 16, ``round(v / maxval *
+(2**n - 1))``, as Pillow and imageio read it (the format's samples mean ``v / maxval``;
+unlike a 12-bit TIFF's DN, a camera's PGM of maxval 4095 comes scaled: ``v * 4095 / 65535``
+gives its stored numbers back).
+A grey ``.pgm`` or RGB ``.ppm`` is written (binary, maxval 255 or 65535, no profile); the
+others are not (write PNG).
 DICOM (``.dcm``, ``.dicom``, or any file with ``DICM`` at byte 128) is read through pydicom
 (the ``dicom`` extra; :mod:`imageform.io.dicom` states its rules): the stored values through
 the Modality LUT (integers where the rescale is the identity, else float32), MONOCHROME1
@@ -78,6 +89,8 @@ from imageform._validate import (
     shorten,
 )
 from imageform.errors import InvalidInputError, UnreadableFileError
+from imageform.io import _netpbm
+from imageform.io._netpbm import is_netpbm
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
@@ -117,11 +130,20 @@ IMAGE_FORMATS = MappingProxyType(
         ".gif": "gif",
         ".dcm": "dicom",
         ".dicom": "dicom",
+        ".pbm": "netpbm",
+        ".pgm": "netpbm",
+        ".ppm": "netpbm",
+        ".pnm": "netpbm",
+        ".pam": "netpbm",
+        ".tga": "tga",
+        ".qoi": "qoi",
     }
 )
 
 #: The formats :func:`write_image` writes (the others of IMAGE_FORMATS are read only).
-_WRITTEN = ("png", "jpeg", "tiff", "npy")
+_WRITTEN = ("png", "jpeg", "tiff", "npy", "netpbm")
+#: The Netpbm suffixes written: a binary PGM (grey) or PPM (RGB), 8 or 16 bits.
+_NETPBM_WRITTEN = {".pgm": 1, ".ppm": 3}
 
 #: Default limit on the pixels of an image read into memory (10000 x 10000); larger images
 #: go through ``imageform chunked``, or raise the limit with ``IMAGEFORM_MAX_PIXELS``.
@@ -143,7 +165,8 @@ class ImageInfo(NamedTuple):
     """What a file's header says: size, channels, sample type and format.
 
     ``width``, ``height`` (upright, as :func:`read_image` returns it), ``channels``, sample
-    ``dtype`` and ``format`` (png, jpeg, tiff, npy, heif, webp, bmp, gif, dicom).
+    ``dtype`` and ``format`` (png, jpeg, tiff, npy, heif, webp, bmp, gif, netpbm, tga, qoi,
+    dicom).
     """
 
     width: int
@@ -199,7 +222,11 @@ def image_format(path: str | Path) -> str:
     suffix = p.suffix.lower()
     if suffix not in IMAGE_FORMATS:
         valid = ", ".join(IMAGE_FORMATS)
-        written = ", ".join(s for s, f in IMAGE_FORMATS.items() if f in _WRITTEN)
+        written = ", ".join(
+            s
+            for s, f in IMAGE_FORMATS.items()
+            if f in _WRITTEN and (f != "netpbm" or s in _NETPBM_WRITTEN)
+        )
         shown = shorten(p)
         raise InvalidInputError(
             f"unknown image file type {suffix[:20]!r} of {shown}; imageform reads {valid} "
@@ -478,6 +505,10 @@ def image_info(path: str | Path) -> ImageInfo:
             raise
         except Exception as exc:
             raise UnreadableFileError(p, f"{_one_line(exc)}") from None
+    if fmt == "netpbm":
+        with p.open("rb") as fh:
+            nh = _netpbm.header(fh.read(1 << 16), p)
+        return ImageInfo(nh.width, nh.height, nh.channels, nh.dtype, "netpbm")
     if fmt == "heif":
         return _heif_info(_open_heif(p))  # libheif's size: its rotation applied
     if fmt == "dicom":
@@ -691,6 +722,10 @@ def _content_format(p: Path, fmt: str) -> str:
         found = "webp"
     elif head.startswith(b"BM") and len(head) >= 18 and head[14] in (12, 40, 52, 56, 108, 124):
         found = "bmp"  # its DIB header's size, so that text starting "BM" is not one
+    elif is_netpbm(head):
+        found = "netpbm"
+    elif head.startswith(b"qoif"):
+        found = "qoi"
     elif head.startswith((b"\xff\x0a", b"\0\0\0\x0cJXL ")):
         found = "JPEG XL"
     elif _dicom_head(first):
@@ -702,7 +737,8 @@ def _content_format(p: Path, fmt: str) -> str:
             p,
             f"it holds {'an' if found[0] in 'AEIOU' else 'a'} {found} image, "
             f"not {fmt.upper()}; imageform reads "
-            "PNG, JPEG, TIFF, WebP, BMP, GIF, .npy, HEIF and DICOM (convert it to one of them)",
+            "PNG, JPEG, TIFF, WebP, BMP, GIF, Netpbm, TGA, QOI, .npy, HEIF and DICOM (convert "
+            "it to one of them)",
         )
     return found
 
@@ -1020,6 +1056,15 @@ def _tiff_samples(
     return arr
 
 
+def _read_netpbm(p: Path, limit: int) -> tuple[np.ndarray, bool]:
+    """Read a PBM, PGM, PPM or PAM file (:mod:`imageform.io._netpbm` states the rules)."""
+    with p.open("rb") as fh:
+        head = _netpbm.header(fh.read(1 << 16), p)
+    info = ImageInfo(head.width, head.height, head.channels, head.dtype, "netpbm")
+    _check_pixels(p, info, limit)
+    return _netpbm.read(p, p.read_bytes())
+
+
 def _read_npy(p: Path, limit: int) -> np.ndarray:
     _npy_header(p, limit)
     try:
@@ -1065,7 +1110,8 @@ def read_image(
     ----------
     path : str or Path
         A ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff``, ``.npy``, ``.webp``, ``.bmp``,
-        ``.gif`` or HEIF file (:data:`IMAGE_FORMATS`), or a DICOM file under any name (the
+        ``.gif``, Netpbm (``.pgm``, ``.ppm``, ``.pbm``, ``.pnm``, ``.pam``), ``.tga``, ``.qoi``
+        or HEIF file (:data:`IMAGE_FORMATS`), or a DICOM file under any name (the
         ``dicom`` extra; its values through the Modality LUT, see :func:`read_dicom`).
     alpha : {"reject", "drop", "keep"}
         An alpha channel with any transparent pixel: an error (``reject``), ignored
@@ -1108,7 +1154,7 @@ def read_image(
         has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     elif fmt == "jpeg":
         arr = _read_pillow(p, limit)
-    elif fmt in ("webp", "bmp", "gif"):
+    elif fmt in ("webp", "bmp", "gif", "tga", "qoi"):
         arr = _read_pillow(p, limit, fmt)
         has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     elif fmt == "tiff":
@@ -1118,6 +1164,8 @@ def read_image(
         has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     elif fmt == "dicom":
         arr = _read_dicom(p, limit)
+    elif fmt == "netpbm":
+        arr, has_alpha = _read_netpbm(p, limit)
     else:
         arr = _read_npy(p, limit)
     return _normalise(p, arr, alpha, has_alpha)
@@ -1313,11 +1361,12 @@ def write_image(
     Parameters
     ----------
     path : str or Path
-        ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff`` or ``.npy``.
+        ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff``, ``.npy``, or ``.pgm`` (grey) /
+        ``.ppm`` (RGB): binary Netpbm of maxval 255 or 65535, with no colour profile.
     image : array_like (H, W) or (H, W, C), C in 1..4
         Floats in [0, 1] (encoded values), uint8 or uint16.
     bit_depth : {8, 16}, optional
-        Bits per sample for PNG (JPEG: 8 only) and for integer TIFF (``bits`` is its
+        Bits per sample for PNG and PGM/PPM (JPEG: 8 only) and for integer TIFF (``bits`` is its
         deprecated name). Default: the integer
         input's depth, 8 for floats in PNG/JPEG; TIFF and ``.npy`` store floats as floats.
     out_of_range : {"error", "clip"}
@@ -1393,10 +1442,13 @@ def write_image(
         )
     if a.dtype.kind not in "fu" or a.dtype.itemsize > 8:
         raise InvalidInputError(f"expected floats, uint8 or uint16 to write {p}, got {a.dtype}")
+    if fmt == "netpbm" and p.suffix.lower() not in _NETPBM_WRITTEN:
+        fmt = {".pbm": "PBM", ".pam": "PAM"}.get(p.suffix.lower(), "PNM")  # read only
     if fmt not in _WRITTEN:
         name = {"heif": "HEIF", "webp": "WebP"}.get(fmt, fmt.upper())
         raise InvalidInputError(
-            f"imageform reads {name} but does not write it; write a .png, .jpg or .tif file"
+            f"imageform reads {name} but does not write it; write a .png, .jpg, .tif, .pgm or "
+            ".ppm file"
         )
     if fmt == "npy":
         atomic_write(p, lambda t: np.save(t, a, allow_pickle=False))
@@ -1416,6 +1468,24 @@ def write_image(
         atomic_write(p, lambda t: tifffile.imwrite(t, a, photometric=photometric, **extra))
         return WrittenImage(bits if a.dtype.kind == "u" else None, n_out)
     depth = bits if bits is not None else (16 if a.dtype == np.uint16 else 8)
+    if fmt == "netpbm":
+        want = _NETPBM_WRITTEN[p.suffix.lower()]
+        have = a.shape[-1] if a.ndim == 3 else 1
+        if have != want:
+            kind = {1: "grey", 2: "grey with alpha", 3: "RGB", 4: "RGB with alpha"}[have]
+            other = shown.stem + {1: ".pgm", 3: ".ppm"}.get(have, ".png")
+            raise InvalidInputError(
+                f"{p.suffix.upper()[1:]} holds {'grey' if want == 1 else 'RGB'} images, this "
+                f"one is {kind}; write {other}"
+            )
+        if profile is not None:
+            raise InvalidInputError(
+                f"Netpbm has no colour profile; write {shown.stem}.png or .tif to declare "
+                f"{color_space}"
+            )
+        q, n_out = _quantise(a, depth, out_of_range, shown)
+        atomic_write(p, lambda t: t.write_bytes(_netpbm.encode(q)))
+        return WrittenImage(depth, n_out)
     if fmt == "jpeg":
         if depth != 8:
             raise InvalidInputError(f"JPEG holds 8 bits per sample; write {shown.stem}.png for 16")
@@ -1457,7 +1527,8 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     """Return the colour space an image file declares.
 
     In this order: an embedded ICC profile (JPEG APP2, PNG ``iCCP``, TIFF tag 34675, HEIF's
-    ``colr`` box, WebP's ``ICCP`` chunk, a GIF's ICC extension) named by
+    ``colr`` box, WebP's ``ICCP`` chunk, a GIF's ICC extension, a BMP's BITMAPV5HEADER
+    profile) named by
     :func:`identify_icc` (a CMYK JPEG's CMYK profile: ``srgb``, what :func:`read_image`
     converts it to); HEIF's ``nclx`` colour description (H.273 code points:
     BT.709/sRGB, Display P3 or BT.2020 primaries with the sRGB, BT.709 or a
@@ -1508,8 +1579,12 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     if not p.is_file():
         raise UnreadableFileError(p, "no such file")
     fmt = _content_format(p, fmt)
-    if fmt == "npy":
+    if fmt in ("npy", "netpbm"):
         return DeclaredColorSpace(None, "none", "")
+    if fmt == "bmp":
+        icc_bmp = _bmp_profile(p)
+        if icc_bmp:
+            return declared_by_profile(icc_bmp)
     if fmt == "dicom":
         from imageform.io import dicom
 
@@ -1560,6 +1635,34 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     if cs == 0xFFFF and isinstance(interop, str) and interop.strip("\0") == "R03":
         return DeclaredColorSpace("adobe_rgb", "exif", "")
     return DeclaredColorSpace(None, "none", "")
+
+
+#: A BITMAPV5HEADER's bV5CSType PROFILE_EMBEDDED, ``'MBED'`` as a little-endian DWORD.
+_BMP_PROFILE_EMBEDDED = b"DEBM"
+
+
+def _bmp_profile(p: Path) -> bytes | None:
+    """Return the ICC profile a BMP embeds (BITMAPV5HEADER, PROFILE_EMBEDDED), else None.
+
+    The V5 header (124 bytes, at byte 14) holds bV5CSType at its byte 56 and bV5ProfileData,
+    bV5ProfileSize at 112 and 116, the profile's offset counted from the header's start
+    (Microsoft's BITMAPV5HEADER reference). Pillow does not read it. An offset or size past
+    the end of the file is refused in one line.
+    """
+    with p.open("rb") as fh:
+        head = fh.read(14 + 124)
+        if len(head) < 138 or struct.unpack("<I", head[14:18])[0] != 124:
+            return None
+        if head[70:74] != _BMP_PROFILE_EMBEDDED:
+            return None
+        offset, size = struct.unpack("<II", head[126:134])
+        fh.seek(14 + offset)
+        data = fh.read(size)
+    if size == 0 or len(data) != size:
+        raise UnreadableFileError(
+            p, f"its embedded ICC profile ({size} bytes at {14 + offset}) is past the file's end"
+        )
+    return data
 
 
 def _recorded_space(description: str) -> str | None:

@@ -312,7 +312,7 @@ def write(
     bits = getattr(opts, "bit_depth", None)
     policy = getattr(opts, "out_of_range", "clip")
     a = np.asarray(image)
-    if fmt in ("png", "jpeg") and bits is None:
+    if fmt in ("png", "jpeg", "netpbm") and bits is None:
         bits = 16 if like is not None and np.asarray(like).dtype == np.uint16 else 8
         if fmt == "jpeg":
             bits = 8
@@ -372,7 +372,7 @@ def write_mapped(
     bits = getattr(opts, "bit_depth", None)
     policy = getattr(opts, "out_of_range", "clip")
     a = np.asarray(image)
-    if fmt in ("png", "jpeg") and bits is None:
+    if fmt in ("png", "jpeg", "netpbm") and bits is None:
         bits = 16 if like is not None and np.asarray(like).dtype == np.uint16 else 8
         if fmt == "jpeg":
             bits = 8

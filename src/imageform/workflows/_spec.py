@@ -39,8 +39,8 @@ __all__ = [
     "resolve",
 ]
 
-#: Image file suffixes that workflows read and write.
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy")
+#: Image file suffixes that workflows read and write (.pgm grey, .ppm RGB: Netpbm, no profile).
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy", ".pgm", ".ppm")
 
 
 def option(

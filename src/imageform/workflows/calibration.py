@@ -1015,7 +1015,7 @@ WORKFLOWS = (
         "estimated from its straight lines (--from-lines).",
         "imageform.workflows.calibration:undistort",
         UndistortOptions,
-        (Input("image", "Distorted image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF)."),),
+        (Input("image", "Distorted image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, PGM/PPM)."),),
         Output("Undistorted image to write (same size and K)."),
         batch=True,
         suffixes=IMAGE_SUFFIXES,

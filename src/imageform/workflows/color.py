@@ -227,7 +227,15 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
 
         super().check_output(path)
 
-        if image_format(path) in ("png", "jpeg") and self.dst not in _DISPLAYABLE:
+        from imageform.io.icc import RGB_PROFILED
+
+        fmt = image_format(path)
+        if fmt == "netpbm" and self.dst in RGB_PROFILED and self.dst != "srgb":
+            raise InvalidInputError(
+                f"Netpbm has no colour profile to declare {self.dst}: write {path.stem}.png or "
+                f"{path.stem}.tif"
+            )
+        if fmt in ("png", "jpeg", "netpbm") and self.dst not in _DISPLAYABLE:
             raise InvalidInputError(
                 f"{self.dst} values do not fit an integer image: write {path.stem}.tif or "
                 f"{path.stem}.npy (PNG and JPEG hold RGB-like spaces: {', '.join(_DISPLAYABLE)})"
@@ -885,8 +893,8 @@ def palette_check(run: Run, opts: PaletteCheckOptions, *, out: None, colors: str
 
 _IMG = Input(
     "image",
-    "Input image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF; HEIF with the heif extra, DICOM with "
-    "the dicom extra).",
+    "Input image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, PGM/PPM/PBM/PAM, TGA, QOI; HEIF with "
+    "the heif extra, DICOM with the dicom extra).",
 )
 
 
@@ -1074,8 +1082,8 @@ WORKFLOWS = (
         (
             Input(
                 "image",
-                "Image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, HEIF, DICOM) or raw file "
-                "(DNG, CR2 ...).",
+                "Image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, PGM/PPM, TGA, QOI, HEIF, DICOM) "
+                "or raw file (DNG, CR2 ...).",
             ),
         ),
         None,

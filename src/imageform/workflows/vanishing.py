@@ -400,7 +400,7 @@ WORKFLOWS = (
         "Vanishing points, K and the horizon of a photograph; -o draws them on it.",
         "imageform.workflows.vanishing:vanishing",
         VanishingOptions,
-        (Input("image", "A photograph (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF)."),),
+        (Input("image", "A photograph (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, PGM/PPM)."),),
         Output(
             "Overlay image to write (segments by vanishing point, the horizon).", required=False
         ),
@@ -415,7 +415,7 @@ WORKFLOWS = (
         "The visible horizon of a sea, lake or plain photograph; -o draws it on it.",
         "imageform.workflows.vanishing:horizon",
         HorizonOptions,
-        (Input("image", "A photograph (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF)."),),
+        (Input("image", "A photograph (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, PGM/PPM)."),),
         Output("Overlay image to write (the horizon found).", required=False),
         suffixes=(".png", ".jpg", ".jpeg", ".tif", ".tiff"),
         group="geometry",
