@@ -127,3 +127,23 @@ def test_correction_files_are_json_and_read_as_such(
         err = capsys.readouterr().err
         assert needle in err and "Unicode" not in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["chart.png"]
+
+
+def test_stain_normalize_too_little_tissue_names_the_image_and_the_flag(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The library's "mask=None keeps them" read as a Python keyword on the command line: the
+    refusal names the image (--target or the input) and ``--mask none``, and with it the
+    command runs."""
+    from imageform.io import write_image
+
+    img = np.full((64, 64, 3), 12, np.uint8)  # a black (dark artefact) field, a little pink
+    img[:8, :8] = (200, 120, 180)
+    src, out = tmp_path / "dark.png", tmp_path / "o.png"
+    write_image(src, img)
+    args = ["stain-normalize", str(src), "--target", str(src), "-o", str(out)]
+    assert main(args) == 1
+    err = capsys.readouterr().err
+    assert f"--target {src}: Macenko: only" in err and "--mask none keeps them" in err
+    assert "mask=None" not in err and err.count("\n") == 1 and not out.exists()
+    assert main([*args, "--mask", "none"]) == 0 and out.exists()

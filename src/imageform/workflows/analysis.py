@@ -285,8 +285,24 @@ def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
     ref = _srgb(run, opts.target, opts, clip=True)[1]
     mask = _stain_mask(opts, ref, target=True, path=opts.target)
     if opts.method == "macenko":
-        return analysis.macenko_stains(ref, mask=mask)
+        return _macenko(ref, mask, f"--target {opts.target}")
     return analysis.reinhard_stats(ref, mask)
+
+
+def _macenko(img: Any, mask: Any, what: str) -> Any:
+    """:func:`~imageform.analysis.macenko_stains` of ``img``, its refusal in the command's words.
+
+    The library's "mask=None keeps them" is ``--mask none`` here, and the message names the
+    image (the input or ``--target``) it is about.
+    """
+    from imageform import analysis
+    from imageform.errors import DegenerateConfigurationError
+
+    try:
+        return analysis.macenko_stains(img, mask=mask)
+    except DegenerateConfigurationError as exc:
+        msg = str(exc).replace("mask=None keeps them", "--mask none keeps them")
+        raise DegenerateConfigurationError(f"{what}: {msg}") from None
 
 
 def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: Path) -> Result:
@@ -298,7 +314,7 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
     read_as, img, space = _srgb(run, image, opts, clip=True)
     stats = _stain_target(run, opts)
     mask = _stain_mask(opts, img, path=image)
-    source = analysis.macenko_stains(img, mask=mask) if opts.method == "macenko" else None
+    source = _macenko(img, mask, str(image)) if opts.method == "macenko" else None
     if source is not None:
         result = analysis.macenko_normalize(img, stats, source=source)
     else:
