@@ -344,7 +344,7 @@ def test_ome_tiff_pyramid_keeps_its_pixel_size(tmp_path: Path) -> None:
     """An OME-TIFF pyramid (0.25 um/px in its OME-XML) gives an OME-TIFF pyramid with the
     same PhysicalSizeX/Y, and resolution tags of 40000 px/cm at level 0, 20000 at level 1;
     an Aperio header's MPP is read the same way."""
-    from imageform.batch._lazy import _microns
+    from imageform.io import pixel_size_um
 
     img = _image(512, 512)
     src = tmp_path / "in.ome.tif"
@@ -361,4 +361,6 @@ def test_ome_tiff_pyramid_keeps_its_pixel_size(tmp_path: Path) -> None:
         levels = tf.series[0].levels
         assert [lv.keyframe.tags["XResolution"].value for lv in levels] == [(40000, 1), (20000, 1)]
     header = "Aperio Image Library v10.0.51\r\n46920x33014 (256x256) JPEG/RGB Q=30|MPP = 0.4990"
-    assert _microns(header) == (0.499, 0.499)
+    svs = tmp_path / "aperio.tif"
+    tifffile.imwrite(svs, img[:64, :64], description=header)
+    assert pixel_size_um(svs) == (0.499, 0.499)

@@ -239,25 +239,6 @@ class _TiffMeta:
     bits: int | None = None
 
 
-def _microns(desc: str) -> tuple[float, float] | None:
-    """Return the pixel size in micrometres (x, y) a TIFF description states, or None.
-
-    The description is an OME-XML (``PhysicalSizeX/Y``, in um) or an Aperio SVS one
-    (``MPP = ...``).
-    """
-    import re
-
-    if "Aperio" in desc[:200]:
-        m = re.search(r"\bMPP\s*=\s*([0-9.eE+-]+)", desc)
-        return (float(m.group(1)),) * 2 if m else None
-    xs = re.search(r'PhysicalSizeX="([0-9.eE+-]+)"', desc)
-    ys = re.search(r'PhysicalSizeY="([0-9.eE+-]+)"', desc)
-    units = re.findall(r'PhysicalSize[XY]Unit="([^"]*)"', desc)
-    if not xs or any(u not in ("µm", "um", "\u00b5m") for u in units):
-        return None
-    return float(xs.group(1)), float(ys.group(1)) if ys else float(xs.group(1))
-
-
 def _factor(big: tuple[int, int], small: tuple[int, int]) -> int:
     """Return the whole reduction factor from ``big`` to ``small``, or 0 when there is none.
 
@@ -275,6 +256,8 @@ def _tiff_meta(p: Path) -> _TiffMeta:
     above.
     """
     import tifffile
+
+    from imageform.io import pixel_size_um
 
     with tifffile.TiffFile(p) as tf:
         series = tf.series[0]
@@ -307,7 +290,7 @@ def _tiff_meta(p: Path) -> _TiffMeta:
             res = (xr[0] / xr[1], yr[0] / yr[1]) if xr[1] and yr[1] else None
         unit = int(tags["ResolutionUnit"].value) if "ResolutionUnit" in tags else None
         desc = page.description or None
-        microns = _microns(desc) if desc else None
+        microns = pixel_size_um(p) if desc else None  # OME PhysicalSize or Aperio MPP
         if desc is not None and (
             page.is_shaped or tf.is_ome or tf.is_svs or desc.lstrip()[:1] in ("{", "<")
         ):

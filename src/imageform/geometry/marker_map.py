@@ -40,7 +40,7 @@ from imageform.geometry.marker_tracking import (
     _refine_marker_corners,
     marker_points,
 )
-from imageform.geometry.tracking import BoardPose, _check_camera, _missing, _quat
+from imageform.geometry.tracking import BoardPose, _blend, _check_camera, _missing
 
 __all__ = ["MarkerMap", "MarkerMapTracker", "grid_marker_map"]
 
@@ -500,7 +500,7 @@ class MarkerMapTracker:
         R, t, rms, inl = got
         self._since_frame = 0 if searched == "frame" else self._since_frame + 1
         if self.smooth < 1.0 and self._last is not None and self._last.found:
-            R, t = self._blend(R, t, self._last)
+            R, t = _blend(R, t, self._last, self.smooth)
         pts = uv[inl].reshape(-1, 2)
         pose = BoardPose(
             True,
@@ -538,14 +538,3 @@ class MarkerMapTracker:
         self._box = self._last = None
         self._since_frame = 0
         return _missing("none", uv)
-
-    def _blend(self, R: F64, t: F64, last: BoardPose) -> tuple[F64, F64]:
-        from imageform.geometry.rotations import quaternion_to_matrix
-
-        a = self.smooth
-        q0, q1 = _quat(last.R), _quat(R)
-        if np.dot(q0, q1) < 0:
-            q1 = -q1
-        q = (1 - a) * q0 + a * q1
-        q /= np.linalg.norm(q)
-        return np.asarray(quaternion_to_matrix(q), np.float64), (1 - a) * last.tvec + a * t

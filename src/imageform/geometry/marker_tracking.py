@@ -32,7 +32,7 @@ from imageform._typing import ArrayLike
 from imageform._validate import as_int, as_matrix, as_points, as_real, describe
 from imageform.errors import InvalidInputError
 from imageform.geometry.distortion import BrownConrady, DivisionModel, KannalaBrandt
-from imageform.geometry.tracking import BoardPose, _check_camera, _missing, _quat
+from imageform.geometry.tracking import BoardPose, _blend, _check_camera, _missing
 
 __all__ = ["MarkerTracker", "SquarePoses", "marker_points", "solve_square_pose"]
 
@@ -456,7 +456,7 @@ class MarkerTracker:
         if not np.isfinite(rms) or np.any(X @ R[2] + t[2] <= 0):
             return self._lost(uv)
         if self.smooth < 1.0 and self._last is not None and self._last.found:
-            R, t = self._blend(R, t, self._last)
+            R, t = _blend(R, t, self._last, self.smooth)
         from imageform.geometry.rotations import matrix_to_rvec
 
         rvec = np.asarray(matrix_to_rvec(R), np.float64)
@@ -472,14 +472,3 @@ class MarkerTracker:
     def _lost(self, uv: F64 | None = None) -> BoardPose:
         self._box = self._last = None
         return _missing("none", uv)
-
-    def _blend(self, R: F64, t: F64, last: BoardPose) -> tuple[F64, F64]:
-        from imageform.geometry.rotations import quaternion_to_matrix
-
-        a = self.smooth
-        q0, q1 = _quat(last.R), _quat(R)
-        if np.dot(q0, q1) < 0:
-            q1 = -q1
-        q = (1 - a) * q0 + a * q1
-        q /= np.linalg.norm(q)
-        return np.asarray(quaternion_to_matrix(q), np.float64), (1 - a) * last.tvec + a * t

@@ -185,6 +185,24 @@ def _quat(R: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.asarray(matrix_to_quaternion(R), np.float64)
 
 
+def _blend(
+    R: NDArray[np.float64], t: NDArray[np.float64], last: BoardPose, a: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Return the pose ``a`` of the way from ``last`` to ``(R, t)`` (every tracker's smoothing).
+
+    The rotations by normalised linear interpolation of their quaternions (the nearer sign),
+    the translations linearly.
+    """
+    from imageform.geometry.rotations import quaternion_to_matrix
+
+    q0, q1 = _quat(last.R), _quat(R)
+    if np.dot(q0, q1) < 0:  # the same rotation, the nearer sign
+        q1 = -q1
+    q = (1 - a) * q0 + a * q1
+    q /= np.linalg.norm(q)
+    return np.asarray(quaternion_to_matrix(q), np.float64), (1 - a) * last.tvec + a * t
+
+
 class BoardTracker:
     r"""Follow a ChArUco board or a checkerboard through video frames.
 
@@ -556,7 +574,7 @@ class BoardTracker:
         R = np.asarray(res.R, np.float64)
         t = np.asarray(res.tvec, np.float64)
         if self.smooth < 1.0 and self._last is not None and self._last.found:
-            R, t = self._blend(R, t, self._last)
+            R, t = _blend(R, t, self._last, self.smooth)
         rvec = np.asarray(matrix_to_rvec(R), np.float64)
         pose = BoardPose(True, rvec, t, R, float(res.rms), uv, X, searched)
         # the next frame's box: this one's corners, grown by half their extent (>= 32 px)
@@ -581,16 +599,3 @@ class BoardTracker:
         if self._frame_vain:
             self._vain += 1
         return _missing("none", uv)
-
-    def _blend(
-        self, R: NDArray[np.float64], t: NDArray[np.float64], last: BoardPose
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        from imageform.geometry.rotations import quaternion_to_matrix
-
-        a = self.smooth
-        q0, q1 = _quat(last.R), _quat(R)
-        if np.dot(q0, q1) < 0:  # the same rotation, the nearer sign
-            q1 = -q1
-        q = (1 - a) * q0 + a * q1
-        q /= np.linalg.norm(q)
-        return np.asarray(quaternion_to_matrix(q), np.float64), (1 - a) * last.tvec + a * t
