@@ -7,8 +7,10 @@
 from __future__ import annotations
 
 import math
+import tomllib
 from collections.abc import Mapping, Sequence
 from datetime import UTC, datetime
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -16,6 +18,28 @@ import numpy as np
 from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = ["Reader", "short_list", "toml_string", "toml_value"]
+
+
+def load_toml(p: Path, what: str, form: str) -> dict[str, Any]:
+    """Return the TOML file ``p`` (a camera file, a marker map) parsed, or refuse it in one line.
+
+    ``what`` names the kind of file in the messages, ``form`` says what it should be (an image
+    given for it is "not UTF-8 text").
+    """
+    if not p.is_file():
+        raise InvalidInputError(f"{what} {p} does not exist")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:  # an image or other binary file given for it
+        raise InvalidInputError(
+            f"{p} is not a {what}: not UTF-8 text (byte {exc.start}); a {what} is {form}"
+        ) from None
+    except OSError as exc:
+        raise InvalidInputError(f"cannot read {what} {p}: {exc}") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InvalidInputError(f"{p}: not valid TOML: {exc}") from None
 
 
 class Reader:

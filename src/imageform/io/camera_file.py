@@ -27,7 +27,6 @@ The module imports :mod:`imageform.geometry` only when a camera is built, so imp
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Mapping
 from dataclasses import replace
 from datetime import UTC, datetime
@@ -38,7 +37,6 @@ import numpy as np
 
 from imageform._files import atomic_write, check_writable
 from imageform._validate import as_bool, as_path, describe
-from imageform.errors import InvalidInputError
 from imageform.io._camera_model import (
     _ALWAYS,
     _TABLES,
@@ -115,22 +113,12 @@ def read_camera(path: str | Path) -> CameraFile:
     >>> cf.camera.K[0].tolist(), cf.distortion_model, cf.has_pose, cf.version
     ([500.0, 0.0, 320.0], 'brown_conrady', False, 0)
     """
+    from imageform.io._camera_toml import load_toml
+
     p = as_path(path, "path")
-    if not p.is_file():
-        raise InvalidInputError(f"camera file {p} does not exist")
-    try:
-        text = p.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:  # an image or other binary file given for the camera
-        raise InvalidInputError(
-            f"{p} is not a camera file: not UTF-8 text (byte {exc.start}); a camera file is "
-            "the TOML that imageform calibrate writes (docs/camera-file.md)"
-        ) from None
-    except OSError as exc:
-        raise InvalidInputError(f"cannot read camera file {p}: {exc}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InvalidInputError(f"{p}: not valid TOML: {exc}") from None
+    data = load_toml(
+        p, "camera file", "the TOML that imageform calibrate writes (docs/camera-file.md)"
+    )
     from imageform.io._camera_read import parse
 
     return replace(parse(data, str(p)), path=p)

@@ -22,7 +22,6 @@ frame is the object's (a tool's, a cube's): a plan drawn on the overlay is in it
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -32,7 +31,7 @@ from imageform._files import atomic_write
 from imageform._validate import as_path, describe
 from imageform.errors import InvalidInputError
 from imageform.geometry.marker_map import MarkerMap
-from imageform.io._camera_toml import Reader, toml_string, toml_value
+from imageform.io._camera_toml import Reader, load_toml, toml_string, toml_value
 
 __all__ = ["MARKER_MAP_FORMAT", "MARKER_MAP_VERSION", "read_marker_map", "write_marker_map"]
 
@@ -79,21 +78,7 @@ def read_marker_map(path: str | Path, *, dictionary: str | None = None) -> Marke
     ([0, 1, 2, 3], '4x4_50', 'mm', [66.0, 66.0, 0.0])
     """
     p = as_path(path, "path")
-    if not p.is_file():
-        raise InvalidInputError(f"marker map {p} does not exist")
-    try:
-        text = p.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise InvalidInputError(
-            f"{p} is not a marker map: not UTF-8 text (byte {exc.start}); a marker map is TOML "
-            "(docs/tracking.md)"
-        ) from None
-    except OSError as exc:
-        raise InvalidInputError(f"cannot read marker map {p}: {exc}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InvalidInputError(f"{p}: not valid TOML: {exc}") from None
+    data = load_toml(p, "marker map", "TOML (docs/tracking.md)")
     r = Reader(str(p))
     r.known(data, _KEYS, "")
     fmt = data.get("format", MARKER_MAP_FORMAT)
