@@ -54,6 +54,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "calibration-endoscope": "benchmarks/check_calibration_endoscope.py",
     "exif-focal": "benchmarks/check_exif_focal.py",
     "calibration-fisheye": "benchmarks/check_calibration_fisheye.py",
+    "sim-dng": "benchmarks/check_sim_dng.py",
     "chart-detect": "benchmarks/bench_chart_detect.py",
     "chart-fresh": "benchmarks/check_chart_real.py",
     "chart-input": "benchmarks/check_chart_input.py",
