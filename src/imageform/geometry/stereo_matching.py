@@ -193,18 +193,27 @@ def stereo_disparity(
        textured rim (the pixels within 3 px outside it), refitted twice on the rim's
        disparities within 1 px of it, where at least 80 % of the rim's valid disparities are
        such inliers and half of the rim is valid (a rim on two surfaces fails; invalid pixels
-       of the region are filled too, never those of the invalid band). In a region without
+       of the region are filled too, never those of the invalid band). The plane is then
+       refitted twice on the rim's and the region's own valid disparities within 1 px of it
+       (matched faint texture pulls it toward a curved surface), and the region keeps its
+       matched disparities where the plane explains its pixels worse:
+       ``E(plane) > 1.4 E(matched)``, ``E(d)`` the mean absolute deviation from its mean of
+       ``L(x, y) - R(x - d, y)`` over the region's valid pixels (the right row interpolated
+       linearly), or where more than 20 % of its pixels on the plane would land on right
+       pixels claimed by textured pixels of a disparity more than 1 px lower (the plane would
+       hide what the right view sees). In a region without
        texture every disparity costs alike and each path carries in the disparity of the
        edge it came from, a step costing ``P1``: the sum takes one of those edges' values
        where a slanted surface's disparity changes (SGM's fronto-parallel bias; the plane
        fits of segments, Hirschmüller 2008 for untextured areas, Klaus et al. ICPR 2006). On
-       ``benchmarks/check_stereo_slant.py``'s board pairs (truth the board's plane) the
-       share more than 1 px off falls from 8.08 % to 4.88 % on webcam-1 (OpenCV
-       ``MODE_HH`` 6.51 %), from 11.66 % to 8.85 % on the XIMEA pairs (OpenCV 10.04 %), from
-       10.82 % to 8.34 % on webcam-2 (OpenCV 8.17 %), Middlebury Adirondack's from 5.80 % to
-       4.94 %; it rises on teddy (5.41 % to 5.78 %) and by 0.08 point on the mean of six
-       Middlebury 2005 / 2006 scenes. The cap of 2 % keeps large flat regions (Venus's
-       background, whose long rim spans several surfaces) as matched.
+       ``benchmarks/check_stereo_planes.py``'s board pairs (truth the board's plane) the
+       share more than 1 px off falls from 8.08 % to 4.87 % on webcam-1 (OpenCV
+       ``MODE_HH`` 6.51 %), from 11.66 % to 8.89 % on the XIMEA pairs (OpenCV 10.04 %), from
+       10.82 % to 8.43 % on webcam-2 (OpenCV 8.17 %), from 2.39 % to 0.99 % on the da Vinci
+       endoscope's (OpenCV 13.64 %); Middlebury Adirondack's from 5.80 % to 4.68 %, teddy
+       5.41 % to 5.44 % (5.78 % with the rim's plane alone, 2026-11-30h), the mean of six
+       Middlebury 2005 / 2006 scenes 4.00 % both (4.08 %). The cap of 2 % keeps large flat
+       regions (Venus's background, whose long rim spans several surfaces) as matched.
 
     Parameters
     ----------
@@ -317,8 +326,9 @@ def stereo_disparity(
     -----
     The work is ``O(H W D)`` with ``D = num_disparities`` (about 3 ns a pixel and disparity
     on one core with numba, the block sums of ``cost_window`` some 0.3 ns more, sliding;
-    ``plane_fill`` some 80 ns a pixel, whatever ``D``, in NumPy and SciPy;
-    ``benchmarks/check_stereo_slant.py`` times it against OpenCV's ``MODE_HH``); memory 3
+    ``plane_fill`` some 80 ns a pixel, whatever ``D``, in NumPy and SciPy, its refit and
+    tests 1 % to 8 % more of the whole;
+    ``benchmarks/check_stereo_planes.py`` times it against OpenCV's ``MODE_HH``); memory 3
     bytes a pixel and disparity. The numba kernels
     (:mod:`imageform._kernels.sgm`) and their NumPy twins give the same numbers.
 
