@@ -138,6 +138,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "stain-ihc": "benchmarks/check_stain_fresh.py",
     "stain-ihcmask": "benchmarks/check_stain_ihc_fresh.py",
     "stain-scale": "benchmarks/check_stain_scale.py",
+    "stain-wash": "benchmarks/check_stain_wash.py",
     "stereo-depth": "benchmarks/check_stereo_depth.py",
     "stereo-fresh": "benchmarks/check_stereo_fresh.py",
     "stereo-vertical": "benchmarks/check_stereo_vertical.py",
