@@ -577,7 +577,7 @@ def test_a_fisheye_without_a_camera_file_runs_off_and_falls_back(
     camera file: f and one radial term run off along their valley (537.6 -> 2487 px, k1
     -17.8); the run-off is said and the radial term held, f refined alone (362.1 px; it does
     not settle either, and says so). The equidistant fisheye is tried (f 196.8 px) and not
-    kept: on the tracks of both models its robust cost is the higher (1978 against 1494
+    kept: on the tracks of both models its robust cost is the higher (1913 against 1494
     px^2 when measured, sfm-choice-2026-11-30j.md; the median errors tie at 0.54 px), so
     the camera file is the f-alone pinhole, no distortion, and the notes say to calibrate."""
     endo = Path(__file__).resolve().parents[1] / "data" / "endo"
