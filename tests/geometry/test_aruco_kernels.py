@@ -325,3 +325,49 @@ def test_one_marker_found_twice_is_one_sighting() -> None:
     sq = np.array([[0.0, 0.0], [40.0, 0.0], [40.0, 40.0], [0.0, 40.0]])
     kept = _sightings([(0.5, sq + 3.0, 1), (0.9, sq, 0), (0.7, sq + [100.0, 0.0], 0)])
     assert [s[0] for s in kept] == [0.9, 0.7]
+
+
+def test_span_hull_is_qhulls() -> None:
+    """The rows' spans' hull (status 6's test): twice Qhull's area, in integers."""
+    from scipy.spatial import ConvexHull
+
+    from imageform._kernels.aruco import _span_hull
+
+    rng = np.random.default_rng(8)
+    for _ in range(300):
+        n = int(rng.integers(2, 40))
+        first = rng.integers(0, 30, n).astype(np.int64)
+        last = first + rng.integers(0, 30, n)
+        spans, twice = _span_hull(first, last, np.empty(4 * n + 2, np.int64))
+        rows = np.arange(n)
+        pts = np.concatenate([np.stack([first, rows], 1), np.stack([last, rows], 1)])
+        assert spans == int(np.sum(last - first + 1))
+        assert twice == pytest.approx(2 * ConvexHull(pts.astype(float)).volume, abs=1e-9)
+
+
+def test_a_holed_cross_is_left_before_its_boundary_is_traced() -> None:
+    """A dark X with a ring at its centre (holed, its rows' spans about half their hull):
+    status 6, in both twins; a marker (spans filling their hull) is read as before."""
+    from imageform._kernels.aruco import box_integral, component_quads, dark_components
+    from imageform.geometry import aruco_marker_image
+    from imageform.geometry.aruco import _spans_thin
+
+    g = np.ones((200, 400))
+    for d in range(-2, 3):
+        idx = np.arange(20, 180)
+        g[idx, np.clip(idx + d, 0, 399)] = 0.0  # one arm
+        g[idx, np.clip(200 - idx + d, 0, 399)] = 0.0  # the other
+    g[90:111, 90:111] = 0.0
+    g[95:106, 95:106] = 1.0  # a ring (a hole) where the arms cross
+    g[40:160, 250:370] = aruco_marker_image(7, "4x4_50", size_px=120) / 255.0
+    integral = box_integral(g, 30)
+    runs, comp_runs, comp_ptr, stats = dark_components(g, integral, 30, 61, 0.02, 200 * 200, 20000)
+    cand = np.nonzero(stats[:, 0] > 500)[0]
+    _, status = component_quads(runs, comp_runs, comp_ptr, cand, stats, 6.0)
+    boxes = stats[cand]
+    cross = int(np.argmin(boxes[:, 3]))  # the leftmost: the X
+    assert status[cross] == 6 and status[1 - cross] == 0
+    r0, r1, c0, c1 = boxes[cross, 1:]
+    assert _spans_thin(g[r0 : r1 + 1, c0 : c1 + 1] < 0.5)
+    m = detect_aruco_markers((g * 255).astype(np.uint8), "4x4_50")
+    assert m.ids.tolist() == [7]

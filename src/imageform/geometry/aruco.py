@@ -479,6 +479,35 @@ def _fill_holes(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
     return np.asarray(mask | inside[bg])
 
 
+def _spans_thin(own: NDArray[np.bool_]) -> bool:
+    """Whether a component's rows' spans fill less than 70 % of their convex hull.
+
+    ``own``: the component in its bounding box (every row holds a pixel). Row ``i``'s span
+    runs from its first to its last pixel; the hull is that of the spans' end pixels'
+    centres (SciPy's Qhull; its area by the shoelace formula in integers). As
+    :func:`imageform._kernels.aruco._span_hull` and ``component_quads``' status 6.
+    """
+    from scipy.spatial import ConvexHull, QhullError
+
+    from imageform._kernels.aruco import SPAN_DEN, SPAN_NUM
+
+    hh, ww = own.shape
+    first = np.argmax(own, axis=1).astype(np.int64)
+    last = (ww - 1 - np.argmax(own[:, ::-1], axis=1)).astype(np.int64)
+    spans = int(np.sum(last - first + 1))
+    rows = np.arange(hh, dtype=np.int64)
+    pts = np.unique(np.concatenate([np.stack([first, rows], 1), np.stack([last, rows], 1)]), axis=0)
+    if len(pts) < 3 or np.ptp(pts[:, 0]) == 0 or np.ptp(pts[:, 1]) == 0:
+        return False  # a line: no area
+    try:
+        v = pts[ConvexHull(pts.astype(np.float64)).vertices]
+    except QhullError:
+        return False  # collinear
+    x, y = v[:, 0], v[:, 1]
+    twice = abs(int(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)))
+    return 2 * SPAN_DEN * spans < SPAN_NUM * twice
+
+
 def _otsu(values: NDArray[np.float64]) -> float:
     """Otsu's threshold of a few values: the split maximising the between-class variance."""
     v = np.sort(values)
@@ -1187,7 +1216,10 @@ def _search_numpy(
                 for b in boxes
             ):
                 continue  # decoded already, at a larger window
-            sub = _fill_holes(labels[sl] == k)
+            own = labels[sl] == k
+            if _spans_thin(own):
+                continue  # its rows' spans fill too little of their hull: no quadrilateral
+            sub = _fill_holes(own)
             if int(np.count_nonzero(sub)) == int(areas[k]):
                 continue  # no holes: a solid blob, not a marker (its code has white cells)
             # boundary pixels: in the component with a 4-neighbour outside it
