@@ -120,6 +120,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "pair-pose": "benchmarks/check_pair_pose.py",
     "reconstruct-real": "benchmarks/bench_reconstruct_real.py",
     "reconstruct-fisheye": "benchmarks/bench_reconstruct_fisheye.py",
+    "track-duplicates": "benchmarks/check_track_duplicates.py",
     "track-breaks": "benchmarks/check_track_breaks.py",
     "track-fresh": "benchmarks/check_track_fresh.py",
     "track-marker": "benchmarks/check_track_marker.py",

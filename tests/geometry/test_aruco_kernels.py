@@ -21,11 +21,15 @@ def _both(g: np.ndarray, name: str = "5x5_100") -> tuple[dict, dict]:
 
 
 def _same(fast: dict, slow: dict) -> None:
+    """The same ids, each with the same sightings (every one, in the order of their centres)."""
     assert sorted(fast) == sorted(slow)
     for mid in fast:
-        np.testing.assert_allclose(fast[mid][1], slow[mid][1], atol=1e-9)
-        assert fast[mid][2] == slow[mid][2]
-        assert fast[mid][0] == pytest.approx(slow[mid][0], abs=1e-9)
+        a, b = (sorted(s, key=lambda x: tuple(x[1].mean(axis=0))) for s in (fast[mid], slow[mid]))
+        assert len(a) == len(b)
+        for x, y in zip(a, b, strict=True):
+            np.testing.assert_allclose(x[1], y[1], atol=1e-9)
+            assert x[2] == y[2]
+            assert x[0] == pytest.approx(y[0], abs=1e-9)
 
 
 def test_kernels_find_the_twins_markers_in_composites() -> None:
@@ -274,3 +278,96 @@ def test_luma_u8_is_the_detectors_luma_rounded_and_its_numpy_twin() -> None:
     # the division by 1000 without a division: exact over every sum the weights reach
     s = np.arange(0, 255 * 1000 + 1, dtype=np.int64) + 500
     np.testing.assert_array_equal((s * 67109) >> 26, s // 1000)
+
+
+def _two_sevens() -> np.ndarray:
+    """Marker 7 printed twice (120 and 90 px) and marker 3 once, on white."""
+    from imageform.geometry import aruco_marker_image
+
+    canvas = np.full((300, 560), 255, np.uint8)
+    canvas[40:160, 30:150] = aruco_marker_image(7, "4x4_50", size_px=120)
+    canvas[60:150, 230:320] = aruco_marker_image(7, "4x4_50", size_px=90)
+    canvas[40:160, 400:520] = aruco_marker_image(3, "4x4_50", size_px=120)
+    canvas[200:260, 30:300] = 140  # a grey bar: no marker
+    return canvas
+
+
+def test_every_sighting_of_an_id_on_request(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``all_sightings``: both prints of id 7 (the clearer, then the other), OpenCV's ids;
+    the default keeps one sighting an id (the clearer), as before; the twin agrees."""
+    cv2 = pytest.importorskip("cv2")
+    img = _two_sevens()
+    one = detect_aruco_markers(img, "4x4_50")
+    every = detect_aruco_markers(img, "4x4_50", all_sightings=True)
+    assert one.ids.tolist() == [3, 7]
+    assert every.ids.tolist() == [3, 7, 7]
+    np.testing.assert_array_equal(one.corners, every.corners[:2])  # the clearer first
+    np.testing.assert_allclose(sorted(every.corners[1:, 0, 0]), [29.5, 229.5], atol=0.3)
+    assert every.hamming.tolist() == [0, 0, 0]
+    det = cv2.aruco.ArucoDetector(
+        cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50), cv2.aruco.DetectorParameters()
+    )
+    corners, ids, _ = det.detectMarkers(img)
+    assert sorted(ids.ravel().tolist()) == every.ids.tolist()
+    for c, i in zip(corners, ids.ravel(), strict=True):  # the same corners, within a pixel
+        near = np.abs(every.corners[every.ids == i] - c.reshape(4, 2)).max(axis=(1, 2)).min()
+        assert near < 1.0
+    monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
+    slow = detect_aruco_markers(img, "4x4_50", all_sightings=True)
+    np.testing.assert_array_equal(slow.ids, every.ids)
+    np.testing.assert_allclose(slow.corners, every.corners, atol=1e-9)
+
+
+def test_one_marker_found_twice_is_one_sighting() -> None:
+    """Sightings of an id whose centres lie within half a side are one marker (the clearer)."""
+    from imageform.geometry.aruco import _sightings
+
+    sq = np.array([[0.0, 0.0], [40.0, 0.0], [40.0, 40.0], [0.0, 40.0]])
+    kept = _sightings([(0.5, sq + 3.0, 1), (0.9, sq, 0), (0.7, sq + [100.0, 0.0], 0)])
+    assert [s[0] for s in kept] == [0.9, 0.7]
+
+
+def test_span_hull_is_qhulls() -> None:
+    """The rows' spans' hull (status 6's test): twice Qhull's area, in integers."""
+    from scipy.spatial import ConvexHull
+
+    from imageform._kernels.aruco import _span_hull
+
+    rng = np.random.default_rng(8)
+    for _ in range(300):
+        n = int(rng.integers(2, 40))
+        first = rng.integers(0, 30, n).astype(np.int64)
+        last = first + rng.integers(0, 30, n)
+        spans, twice = _span_hull(first, last, np.empty(4 * n + 2, np.int64))
+        rows = np.arange(n)
+        pts = np.concatenate([np.stack([first, rows], 1), np.stack([last, rows], 1)])
+        assert spans == int(np.sum(last - first + 1))
+        assert twice == pytest.approx(2 * ConvexHull(pts.astype(float)).volume, abs=1e-9)
+
+
+def test_a_holed_cross_is_left_before_its_boundary_is_traced() -> None:
+    """A dark X with a ring at its centre (holed, its rows' spans about half their hull):
+    status 6, in both twins; a marker (spans filling their hull) is read as before."""
+    from imageform._kernels.aruco import box_integral, component_quads, dark_components
+    from imageform.geometry import aruco_marker_image
+    from imageform.geometry.aruco import _spans_thin
+
+    g = np.ones((200, 400))
+    for d in range(-2, 3):
+        idx = np.arange(20, 180)
+        g[idx, np.clip(idx + d, 0, 399)] = 0.0  # one arm
+        g[idx, np.clip(200 - idx + d, 0, 399)] = 0.0  # the other
+    g[90:111, 90:111] = 0.0
+    g[95:106, 95:106] = 1.0  # a ring (a hole) where the arms cross
+    g[40:160, 250:370] = aruco_marker_image(7, "4x4_50", size_px=120) / 255.0
+    integral = box_integral(g, 30)
+    runs, comp_runs, comp_ptr, stats = dark_components(g, integral, 30, 61, 0.02, 200 * 200, 20000)
+    cand = np.nonzero(stats[:, 0] > 500)[0]
+    _, status = component_quads(runs, comp_runs, comp_ptr, cand, stats, 6.0)
+    boxes = stats[cand]
+    cross = int(np.argmin(boxes[:, 3]))  # the leftmost: the X
+    assert status[cross] == 6 and status[1 - cross] == 0
+    r0, r1, c0, c1 = boxes[cross, 1:]
+    assert _spans_thin(g[r0 : r1 + 1, c0 : c1 + 1] < 0.5)
+    m = detect_aruco_markers((g * 255).astype(np.uint8), "4x4_50")
+    assert m.ids.tolist() == [7]

@@ -104,8 +104,8 @@ def test_track_a_grid_against_the_truth() -> None:
 def test_a_misread_marker_and_an_occluded_one_are_left_out() -> None:
     """Marker 5's place printed with id 0 (id 0 twice); marker 1 covered.
 
-    imageform's detector keeps one sighting of an id (the clearer): here the misprint, whose
-    corners disagree with markers 2, 3 and 4; the pose is theirs.
+    Both sightings of id 0 reach the consensus: the misprint's corners disagree with markers
+    2, 3 and 4 and are left out; the pose is theirs and the true marker 0's.
     """
     path = _path(6)
     tracker = MarkerMapTracker(GRID, K)
@@ -293,3 +293,38 @@ def test_file_unknown_key_and_missing(tmp_path: Path) -> None:
         read_marker_map(tmp_path / "bin.toml")
     with pytest.raises(InvalidInputError, match="MarkerMap"):
         write_marker_map(tmp_path / "x.toml", "map")  # type: ignore[arg-type]
+
+
+def test_the_true_marker_of_an_id_read_twice_is_used() -> None:
+    """Marker 5's place printed with id 0: both sightings of id 0 reach the consensus (the
+    detector's ``all_sightings``), the true one is used in every frame, never the misprint,
+    and never both (OpenCV's Board takes both: test_opencv_board_is_pulled_...)."""
+    path = _path(6)
+    tracker = MarkerMapTracker(GRID, K)
+    for (R, t), f in zip(path, _frames(path, drawn={5: 0}), strict=True):
+        pose = tracker.update(f)
+        assert pose.found and pose.corners == 20  # markers 0-4
+        firsts = pose.object_points[::4]
+        assert sorted(map(tuple, firsts)) == sorted(tuple(GRID.corners[i, 0]) for i in range(5))
+        c = pose.object_points @ R.T + t
+        uv = c[:, :2] / c[:, 2:] * 520 + K[:2, 2]
+        assert np.abs(pose.image_points - uv).max() < 1.5
+        assert np.linalg.norm(pose.tvec - t) / np.linalg.norm(t) < 0.003
+        assert _angle(pose.R, R) < 1.0
+
+
+def test_one_sighting_of_a_marker_per_hypothesis() -> None:
+    """Of two sightings of one marker that agree with a hypothesis, the nearer stays."""
+    from imageform.geometry.marker_map import _one_each
+
+    which = np.array([0, 1, 0, 2])
+    agree = np.array([[True, True, True, False], [False, True, True, True], [True] * 4])
+    err = np.array([[2.0, 1.0, 1.0, 9.0], [0.5, 1.0, 3.0, 1.0], [1.0, 1.0, 1.0, 1.0]])
+    got = _one_each(agree, err, which)
+    assert got.tolist() == [
+        [False, True, True, False],
+        [False, True, True, True],
+        [True, True, False, True],
+    ]
+    plain = agree[:, :2]
+    assert _one_each(plain, err[:, :2], np.array([0, 1])) is plain  # no id twice: as it is

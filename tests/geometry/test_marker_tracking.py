@@ -193,3 +193,21 @@ def test_distorted_corners_are_undistorted_first() -> None:
     assert np.abs(both.R[0] - R).max() < 1e-6 and np.allclose(both.tvec[0], t, atol=1e-4)
     plain = solve_square_pose(uv, SIDE, K)  # the lens ignored: a pose off the truth
     assert np.linalg.norm(plain.tvec[0] - t) > 1.0
+
+
+def test_a_second_print_of_the_id_is_not_followed() -> None:
+    """Marker 7 shaken 30-50 px a frame (out of its search box) with a larger print of id 7
+    beside it from frame 2 on: the sighting nearest the previous frame's corners is kept
+    (the largest, the rule without a previous frame, would follow the second print)."""
+    from benchmarks.check_track_duplicates import K as K_BENCH
+    from benchmarks.check_track_duplicates import second_print
+
+    truth, frames = second_print()
+    tracker = MarkerTracker(7, 30.0, K_BENCH, dictionary="4x4_50")
+    for (R, t), f in list(zip(truth, frames, strict=True))[:10]:
+        pose = tracker.update(f)
+        assert pose.found
+        assert np.linalg.norm(pose.tvec - t) / np.linalg.norm(t) < 0.02
+        assert _angle(pose.R, R) < 2.0
+    fresh = MarkerTracker(7, 30.0, K_BENCH, dictionary="4x4_50").update(frames[9])
+    assert np.linalg.norm(fresh.tvec - truth[9][1]) / np.linalg.norm(truth[9][1]) > 0.2

@@ -479,6 +479,35 @@ def _fill_holes(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
     return np.asarray(mask | inside[bg])
 
 
+def _spans_thin(own: NDArray[np.bool_]) -> bool:
+    """Whether a component's rows' spans fill less than 70 % of their convex hull.
+
+    ``own``: the component in its bounding box (every row holds a pixel). Row ``i``'s span
+    runs from its first to its last pixel; the hull is that of the spans' end pixels'
+    centres (SciPy's Qhull; its area by the shoelace formula in integers). As
+    :func:`imageform._kernels.aruco._span_hull` and ``component_quads``' status 6.
+    """
+    from scipy.spatial import ConvexHull, QhullError
+
+    from imageform._kernels.aruco import SPAN_DEN, SPAN_NUM
+
+    hh, ww = own.shape
+    first = np.argmax(own, axis=1).astype(np.int64)
+    last = (ww - 1 - np.argmax(own[:, ::-1], axis=1)).astype(np.int64)
+    spans = int(np.sum(last - first + 1))
+    rows = np.arange(hh, dtype=np.int64)
+    pts = np.unique(np.concatenate([np.stack([first, rows], 1), np.stack([last, rows], 1)]), axis=0)
+    if len(pts) < 3 or np.ptp(pts[:, 0]) == 0 or np.ptp(pts[:, 1]) == 0:
+        return False  # a line: no area
+    try:
+        v = pts[ConvexHull(pts.astype(np.float64)).vertices]
+    except QhullError:
+        return False  # collinear
+    x, y = v[:, 0], v[:, 1]
+    twice = abs(int(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)))
+    return 2 * SPAN_DEN * spans < SPAN_NUM * twice
+
+
 def _otsu(values: NDArray[np.float64]) -> float:
     """Otsu's threshold of a few values: the split maximising the between-class variance."""
     v = np.sort(values)
@@ -540,6 +569,7 @@ def detect_aruco_markers(
     windows: tuple[int, ...] | None = None,
     error_correction_rate: float = 0.6,
     max_border_errors: float = 0.35,
+    all_sightings: bool = False,
 ) -> ArucoMarkers:
     """Find and decode the ArUco markers of ``dictionary`` in ``image``.
 
@@ -570,11 +600,18 @@ def detect_aruco_markers(
     max_border_errors : float, keyword-only
         Largest fraction of border cells that may read white (OpenCV's
         ``maxErroneousBitsInBorderRate``, 0.35).
+    all_sightings : bool, keyword-only
+        Report every place an id is read (a second print, a reflection, a misread marker:
+        OpenCV's ``detectMarkers`` does), the clearest first; default (False): one per id,
+        the clearest (the highest contrast less bits corrected). A caller that knows where
+        its markers should be (a marker map, the previous frame) chooses among them.
 
     Returns
     -------
     ArucoMarkers
-        Sorted by id; a marker seen at several threshold windows is reported once.
+        Sorted by id; a marker seen at several threshold windows is reported once (with
+        ``all_sightings``, two sightings of an id whose centres are nearer than half the
+        smaller one's side are one).
 
     Raises
     ------
@@ -597,6 +634,7 @@ def detect_aruco_markers(
         windows=windows,
         error_correction_rate=error_correction_rate,
         max_border_errors=max_border_errors,
+        all_sightings=all_sightings,
     )
 
 
@@ -609,6 +647,7 @@ def _detect(
     windows: tuple[int, ...] | None = None,
     error_correction_rate: float = 0.6,
     max_border_errors: float = 0.35,
+    all_sightings: bool = False,
 ) -> ArucoMarkers:
     """Find the markers as :func:`detect_aruco_markers` does, given the caller's image.
 
@@ -655,15 +694,55 @@ def _detect(
         found = _search_numba(*args, reduce=_reduction(g.shape, most), g8=g8)
     else:
         found = _search_numpy(*args)
-    ids = np.array(sorted(found), dtype=np.int64)
-    corners = np.array([found[i][1] for i in ids], dtype=np.float64).reshape(-1, 4, 2)
-    hamming = np.array([found[i][2] for i in ids], dtype=np.int64)
+    kept = [
+        (i, sighting)
+        for i in sorted(found)
+        for sighting in (_sightings(found[i]) if all_sightings else [_clearest(found[i])])
+    ]
+    ids = np.array([i for i, _ in kept], dtype=np.int64)
+    corners = np.array([c for _, (_, c, _) in kept], dtype=np.float64).reshape(-1, 4, 2)
+    hamming = np.array([h for _, (_, _, h) in kept], dtype=np.int64)
     return ArucoMarkers(ids, corners, hamming, d.name)
 
 
-#: What a search returns: for each marker id, (score, corners (4, 2) in printed order, bits
-#: corrected); the best score (contrast minus bits corrected) of its sightings.
-_Found = dict[int, tuple[float, NDArray[np.float64], int]]
+#: One sighting of a marker: (score, corners (4, 2) in printed order, bits corrected), the
+#: score its contrast minus the bits corrected.
+_Sighting = tuple[float, NDArray[np.float64], int]
+#: What a search returns: each marker id's sightings, in the order found.
+_Found = dict[int, list[_Sighting]]
+
+
+def _clearest(sightings: list[_Sighting]) -> _Sighting:
+    """Return the sighting of the best score (the first found of equal ones)."""
+    best = sightings[0]
+    for s in sightings[1:]:
+        if s[0] > best[0]:
+            best = s
+    return best
+
+
+def _sightings(sightings: list[_Sighting]) -> list[_Sighting]:
+    """Return the distinct sightings of an id, the clearest first.
+
+    Two whose centres are nearer than half the smaller one's side are one marker (found
+    twice, e.g. at windows that gave it boxes of different sizes): the clearer is kept.
+    """
+    order = sorted(range(len(sightings)), key=lambda k: -sightings[k][0])  # stable: ties kept
+    out: list[_Sighting] = []
+    for k in order:
+        c = sightings[k][1]
+        centre, side = c.mean(axis=0), _mean_side(c)
+        if all(
+            float(np.hypot(*(centre - o[1].mean(axis=0)))) >= 0.5 * min(side, _mean_side(o[1]))
+            for o in out
+        ):
+            out.append(sightings[k])
+    return out
+
+
+def _mean_side(c: NDArray[np.float64]) -> float:
+    """Return a quadrilateral's mean side (pixels)."""
+    return float(np.mean(np.hypot(*(np.roll(c, -1, axis=0) - c).T)))
 
 
 def _reduction(shape: tuple[int, int], min_side: float | None) -> int:
@@ -865,8 +944,7 @@ def _search_numba(
             # corner is the observed corner (4 - rot) % 4
             ordered = quad[[(0 - rot) % 4, (1 - rot) % 4, (2 - rot) % 4, (3 - rot) % 4]]
             score = contrast - dist
-            if mid not in found or score > found[mid][0]:
-                found[mid] = (score, ordered, dist)
+            found.setdefault(mid, []).append((score, ordered, dist))
             (x0, x1), (y0, y1) = (
                 (float(quad[:, 0].min()), float(quad[:, 0].max())),
                 (float(quad[:, 1].min()), float(quad[:, 1].max())),
@@ -1138,7 +1216,10 @@ def _search_numpy(
                 for b in boxes
             ):
                 continue  # decoded already, at a larger window
-            sub = _fill_holes(labels[sl] == k)
+            own = labels[sl] == k
+            if _spans_thin(own):
+                continue  # its rows' spans fill too little of their hull: no quadrilateral
+            sub = _fill_holes(own)
             if int(np.count_nonzero(sub)) == int(areas[k]):
                 continue  # no holes: a solid blob, not a marker (its code has white cells)
             # boundary pixels: in the component with a 4-neighbour outside it
@@ -1173,8 +1254,7 @@ def _search_numpy(
             # corner is the observed corner (4 - rot) % 4
             ordered = np.roll(quad, rot, axis=0)
             score = contrast - dist
-            if mid not in found or score > found[mid][0]:
-                found[mid] = (score, ordered, dist)
+            found.setdefault(mid, []).append((score, ordered, dist))
             lo, hi = quad.min(axis=0), quad.max(axis=0)
             boxes.append((lo[0], lo[1], hi[0], hi[1], hh * ww))
     return found

@@ -60,6 +60,28 @@ _KEEP_FRACTION, _KEEP_PX = 0.1, 2.0
 _MAX_SEEDS = 8
 
 
+def _one_each(agree: NDArray[np.bool_], err: F64, which: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """Return ``agree`` (h, m) with at most one sighting of each map marker per row.
+
+    Of the sightings of one marker (``which`` (m,): their indices in the map) that agree
+    with a hypothesis, the one of the smallest error ``err`` (h, m) stays (the first of
+    equal ones): two copies of one marker never enter one pose.
+    """
+    if np.unique(which).size == which.size:
+        return agree
+    out = agree.copy()
+    for k in np.unique(which):
+        seen = np.flatnonzero(which == k)
+        if seen.size < 2:
+            continue
+        e = np.where(agree[:, seen], err[:, seen], np.inf)
+        best = seen[np.argmin(e, axis=1)]
+        out[:, seen] = False
+        rows = np.flatnonzero(agree[:, seen].any(axis=1))
+        out[rows, best[rows]] = True
+    return out
+
+
 def _fit_rotation(A: F64, B: F64) -> F64:
     """Return the rotation R minimising ``sum ||R a_i - b_i||^2`` (centred points, Kabsch)."""
     U, _, Vt = np.linalg.svd(B.T @ A)
@@ -245,8 +267,11 @@ class MarkerMapTracker:
     1. the map's markers are detected (:func:`detect_aruco_markers`), first in the box of
        the whole map as the previous frame's pose projects it, grown by half its size (at
        least 32 pixels each way), in the whole frame when none is there and every
-       ``redetect``-th frame (markers coming into view); an id seen twice keeps both
-       instances (step 2 settles which agrees); each marker's corners are refined by the
+       ``redetect``-th frame (markers coming into view); an id read in two places (a
+       misread marker, a second print, a reflection) keeps both sightings
+       (``detect_aruco_markers(..., all_sightings=True)``: step 2 settles which agrees, and
+       at most one sighting of a marker, the nearer, counts for a hypothesis and enters the
+       pose); each marker's corners are refined by the
        gradient criterion through half a cell (as :class:`MarkerTracker`);
     2. every visible marker's two IPPE-square poses (:func:`solve_square_pose`, closed
        form) give two hypotheses of the object's pose, :math:`R = R_m R_i^\top`,
@@ -345,9 +370,9 @@ class MarkerMapTracker:
         x0, y0, x1, y1 = box if box is not None else (0, 0, image.shape[1], image.shape[0])
         crop = image[y0:y1, x0:x1]
         # by name: the detector caches a predefined dictionary's rotated codes by name
-        found = detect_aruco_markers(crop, self.map.dictionary)
-        # every instance of the map's ids: an id seen twice (a second print, a misread
-        # marker) is settled by which instance agrees with the others (_solve)
+        found = detect_aruco_markers(crop, self.map.dictionary, all_sightings=True)
+        # every sighting of the map's ids: an id seen twice (a second print, a misread
+        # marker, a reflection) is settled by which sighting agrees with the others (_solve)
         keep = [j for j in range(len(found)) if int(found.ids[j]) in self._index]
         if not keep:
             return np.zeros(0, np.int64), np.zeros((0, 4, 2))
@@ -412,7 +437,8 @@ class MarkerMapTracker:
         R_all, t_all, seed = np.stack(Rh), np.stack(th), np.array(seed_of, np.int64)
         loose = np.maximum(_AGREE_PX, _AGREE_FRACTION * side_px)
         own = np.arange(m)[None, :] == seed[:, None]
-        agree = (self._errors(R_all, t_all, X, ideal) < loose) | own
+        err = self._errors(R_all, t_all, X, ideal)
+        agree = _one_each((err < loose) | own, err, which)
         # local optimisation: each hypothesis refined on the markers that agree with it, which
         # are counted again (a pose from one marker extrapolates poorly to far ones)
         Xb = np.broadcast_to(X.reshape(-1, 3), (len(Rh), 4 * m, 3)).copy()
@@ -421,7 +447,7 @@ class MarkerMapTracker:
             w = np.repeat(agree, 4, axis=1).astype(np.float64)
             R_all, t_all, _ = refine_pose(R_all, t_all, Xb, ub, k, w, 10)
             err = self._errors(R_all, t_all, X, ideal)
-            agree = (err < loose) | own
+            agree = _one_each((err < loose) | own, err, which)
         count = agree.sum(axis=1)
         total = np.where(agree, err, 0.0).sum(axis=1)
         near = np.zeros(len(Rh))
@@ -439,6 +465,7 @@ class MarkerMapTracker:
         R0, t0 = R_all[starts], t_all[starts]
         inl = err[best] < np.maximum(_KEEP_PX, _KEEP_FRACTION * side_px)
         inl |= own[best] & ~np.any(inl)
+        inl = _one_each(inl[None], err[best][None], which)[0]
         used = inl
         for _ in range(3):
             used = inl
@@ -447,7 +474,9 @@ class MarkerMapTracker:
             ub = np.broadcast_to(ideal[inl].reshape(-1, 2), (len(starts), 4 * n, 2)).copy()
             R1, t1, rms = refine_pose(R0, t0, Xb, ub, k, np.ones((len(starts), 4 * n)), 20)
             e = self._errors(R1[:1], t1[:1], X, ideal)[0]
-            keep = e < np.maximum(_KEEP_PX, _KEEP_FRACTION * side_px)
+            keep = _one_each(
+                (e < np.maximum(_KEEP_PX, _KEEP_FRACTION * side_px))[None], e[None], which
+            )[0]
             if not np.any(keep) or np.array_equal(keep, inl):
                 break
             inl = keep

@@ -336,6 +336,13 @@ class MarkerTracker:
       the previous frame's, :math:`\min_i \angle(R_i R_{k-1}^\top)`; on a first frame (or
       after a lost one) the better fit.
 
+    The marker's id read in several places (a reflection, a second print:
+    ``detect_aruco_markers(..., all_sightings=True)``): the sighting whose corners are
+    nearest the previous frame's; on a first frame (or after a lost one) the one with the
+    fewest bits corrected, then the largest. A sighting in the box farther than half a side
+    from the previous frame's corners (the marker gone out of the box, a second print in
+    it) sends the search to the whole frame, where the nearest sighting is kept.
+
     A frame without the marker is a missing pose (NaN), never carried over.
 
     Parameters
@@ -405,16 +412,35 @@ class MarkerTracker:
         from imageform.geometry.aruco import detect_aruco_markers
 
         x0, y0, x1, y1 = box if box is not None else (0, 0, image.shape[1], image.shape[0])
-        found = detect_aruco_markers(image[y0:y1, x0:x1], self._detect_with)  # type: ignore[arg-type]
+        found = detect_aruco_markers(
+            image[y0:y1, x0:x1],
+            self._detect_with,  # type: ignore[arg-type]
+            all_sightings=True,
+        )
         hit = np.flatnonzero(found.ids == self.marker_id)
         if hit.size == 0:
             return None
-        # the same id twice (a reflection, a second print): the least corrected, the largest
-        c = found.corners[hit]
-        size = np.abs(_cross2(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]))
-        best = hit[np.lexsort((-size, found.hamming[hit]))[0]]
+        c = found.corners[hit] + np.array([x0, y0], np.float64)
+        last = self._last
+        if hit.size > 1 and last is not None and last.found:
+            # the same id twice (a reflection, a second print): the sighting whose corners
+            # are nearest the previous frame's (the marker followed)
+            best = hit[int(np.argmin(np.linalg.norm(c - last.image_points, axis=2).mean(1)))]
+        else:
+            # or, without a previous frame: the least corrected, then the largest
+            size = np.abs(_cross2(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]))
+            best = hit[np.lexsort((-size, found.hamming[hit]))[0]]
         uv = np.asarray(found.corners[best], np.float64)
         return self._refine(image[y0:y1, x0:x1], uv) + np.array([x0, y0], np.float64)
+
+    def _jumped(self, uv: F64) -> bool:
+        """Whether corners ``uv`` lie more than half a side from the previous frame's."""
+        last = self._last
+        if last is None or not last.found:
+            return False
+        prev = last.image_points
+        side = float(np.linalg.norm(prev - np.roll(prev, 1, axis=0), axis=1).mean())
+        return float(np.linalg.norm(uv - prev, axis=1).mean()) > 0.5 * side
 
     def _refine(self, image: np.ndarray, uv: F64) -> F64:
         return _refine_marker_corners(image, uv, self.dictionary.marker_size)
@@ -442,6 +468,8 @@ class MarkerTracker:
         uv, searched = None, "none"
         if self.predict and self._box is not None:
             uv, searched = self._find(a, self._box), "box"
+            if uv is not None and self._jumped(uv):
+                uv = None  # maybe a second print in the box: choose among the frame's
         if uv is None:
             uv, searched = self._find(a, None), "frame"
         if uv is None:
