@@ -100,11 +100,13 @@ if TYPE_CHECKING:
 __all__ = [
     "DEFAULT_MAX_PIXELS",
     "IMAGE_FORMATS",
+    "ImageFrames",
     "ImageInfo",
     "WrittenImage",
     "image_color_space",
     "image_files",
     "image_format",
+    "image_frames",
     "image_info",
     "max_pixels",
     "pixel_size_um",
@@ -150,6 +152,8 @@ _NETPBM_WRITTEN = {".pgm": 1, ".ppm": 3}
 DEFAULT_MAX_PIXELS = 100_000_000
 
 _ALPHA = ("reject", "drop", "keep")
+#: The formats whose files may hold several images (``frame=`` picks one).
+_FRAMED = ("tiff", "dicom", "gif", "webp")
 #: The key of a TIFF's ImageDescription JSON (the one tifffile writes: ``{"shape": [...]}``)
 #: under which :func:`write_image` records a colour space that has no ICC profile (``lab``,
 #: ``xyz``, a ``linear_`` space ...) and :func:`image_color_space` reads it back.
@@ -174,6 +178,19 @@ class ImageInfo(NamedTuple):
     channels: int
     dtype: str
     format: str
+
+
+class ImageFrames(NamedTuple):
+    """How many images a file holds, and along which axes (:func:`image_frames`).
+
+    ``total``: the images (1 for a file of one image); ``axes``: ``(words, length)`` for
+    each axis of a TIFF stack, in the file's order (``(("time points", 7), ("z-planes",
+    5))``), or ``(("frames", n),)`` for a multi-frame DICOM or an animated GIF or WebP; ``()``
+    for one image. ``frame=`` of :func:`read_image` is the flat index over them, from 0.
+    """
+
+    total: int
+    axes: tuple[tuple[str, int], ...]
 
 
 class _WrittenImage(NamedTuple):
@@ -376,36 +393,56 @@ _AXES_WORDS = {"T": "time points", "Z": "z-planes", "C": "channels", "Q": "pages
                "A": "angles", "L": "exposures", "V": "phases", "S": "samples"}  # fmt: skip
 
 
+def _stack_axes(axes: str, shape: tuple[int, ...]) -> tuple[tuple[str, int], ...]:
+    """Return the axes of a TIFF series other than the image plane (Y, X, samples), in words."""
+    return tuple((_AXES_WORDS.get(a, f"{a} axis"), int(n))
+                 for a, n in zip(axes, shape, strict=True) if a not in "YXS")  # fmt: skip
+
+
 def _tiff_stack(axes: str, shape: tuple[int, ...]) -> str:
-    """Say in words what a TIFF of more than one image holds, and what to do with it.
+    """Say in words what a TIFF of more than one image holds, and how to read one.
 
     ``axes`` ``"TZYX"`` of shape ``(7, 5, 167, 439)``: "a stack of 35 images of 439 x 167 px
-    (7 time points x 5 z-planes) ...".
+    (7 time points x 5 z-planes); read one with frame=N ...".
     """
     if "Y" not in axes or "X" not in axes:
         return f"a TIFF of shape {shape} with no image plane in it (axes {axes})"
     w, h = shape[axes.index("X")], shape[axes.index("Y")]
-    stack = [(n, _AXES_WORDS.get(a, f"{a} axis")) for a, n in zip(axes, shape, strict=True)
-             if a not in "YXS"]  # fmt: skip
-    count = math.prod(n for n, _ in stack)
-    parts = " x ".join(f"{n} {what}" for n, what in stack)
+    stack = _stack_axes(axes, shape)
+    count = math.prod(n for _, n in stack)
+    parts = " x ".join(f"{n} {what}" for what, n in stack)
     return (
-        f"a stack of {count} images of {w} x {h} px ({parts}); imageform reads one image per "
-        "file: save the one you need as its own TIFF (tifffile.imread(path, key=0), or Fiji's "
-        "Stack to Images)"
+        f"a stack of {count} images of {w} x {h} px ({parts}); read one with frame=N, "
+        f"0 to {count - 1} (imageform info and convert: --frame N)"
     )
 
 
-def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
+def _check_frame(path: Path, frame: object, count: int) -> int:
+    """Return ``frame`` as an index into the ``count`` images of ``path``, else one line."""
+    if isinstance(frame, bool) or not isinstance(frame, (int, np.integer)):
+        raise InvalidInputError(f"expected frame as an int >= 0, got {frame!r}")
+    if not 0 <= int(frame) < count:
+        held = "one image (frame 0)" if count == 1 else f"{count} images (frames 0 to {count - 1})"
+        raise InvalidInputError(f"frame {int(frame)} is out of range: {path} holds {held}")
+    return int(frame)
+
+
+def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, ImageInfo]:
+    """Return the first series of a TIFF and what one image of it is (a stack needs frame)."""
     if not tif.series:
         raise UnreadableFileError(path, "the TIFF holds no image")
     series = tif.series[0]
     axes = series.axes
     shape = series.shape
-    channels = shape[axes.index("S")] if "S" in axes else 1
-    if "Y" not in axes or "X" not in axes or any(a not in "YXS" for a in axes):
+    if "Y" not in axes or "X" not in axes:
+        raise UnreadableFileError(path, _tiff_stack(axes, shape))
+    stack = _stack_axes(axes, shape)
+    if stack and frame is None:
         # pages, time points, z-planes or channels of their own (axes QYX, CYX...): a stack
         raise UnreadableFileError(path, _tiff_stack(axes, shape))
+    if frame is not None:
+        _check_frame(path, frame, math.prod(n for _, n in stack))
+    channels = shape[axes.index("S")] if "S" in axes else 1
     if channels > 4:  # refused here, so that image_info says what read_image does
         raise UnreadableFileError(
             path,
@@ -423,6 +460,57 @@ def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
         channels, dtype = 3, "uint8" if eight else "uint16"
     info = ImageInfo(width, height, channels, dtype, "tiff")
     return series, info
+
+
+def image_frames(path: str | Path) -> ImageFrames:
+    """Count the images a file holds: a TIFF stack's, a DICOM's frames, a GIF's or WebP's.
+
+    A TIFF's first series (what :func:`read_image` reads) is a stack when it has axes other
+    than the image plane: pages, z-planes, time points, channels of their own (tifffile's
+    series axes, from ImageJ or OME metadata or the pages); its images are counted without
+    decoding any. Other files hold one image.
+
+    Raises
+    ------
+    InvalidInputError
+        The file is missing or not an image of a known format.
+
+    Examples
+    --------
+    >>> import tifffile
+    >>> p = getfixture("tmp_path") / "zt.ome.tif"
+    >>> tifffile.imwrite(p, np.zeros((3, 2, 4, 5), np.uint16), metadata={"axes": "TZYX"})
+    >>> image_frames(p)
+    ImageFrames(total=6, axes=(('time points', 3), ('z-planes', 2)))
+    >>> read_image(p, frame=5).shape
+    (4, 5, 1)
+    """
+    fmt = _suffix_format(path) if isinstance(path, (str, os.PathLike)) else ""
+    p = _existing(path)
+    fmt = _content_format(p, fmt)
+    axes: tuple[tuple[str, int], ...] = ()
+    if fmt == "tiff":
+        try:
+            with _tifffile().TiffFile(p) as tif:
+                if tif.series:
+                    axes = _stack_axes(tif.series[0].axes, tif.series[0].shape)
+        except Exception as exc:
+            raise UnreadableFileError(p, f"{_one_line(exc)}") from None
+    elif fmt == "dicom":
+        from imageform.io import dicom
+
+        n = dicom.header(p, dicom.open_dicom(p, pixels=False)).frames
+        axes = (("frames", n),) if n > 1 else ()
+    elif fmt in ("gif", "webp"):
+        try:
+            with _pillow_open(p) as im:
+                if getattr(im, "is_animated", False):
+                    axes = (("frames", int(im.n_frames)),)
+        except (OSError, SyntaxError, ValueError) as exc:
+            raise UnreadableFileError(p, f"{_one_line(exc)}") from None
+    else:
+        image_info(p)  # a file of one image: readable?
+    return ImageFrames(math.prod(n for _, n in axes), axes)
 
 
 def pixel_size_um(path: str | Path) -> tuple[float, float] | None:
@@ -471,20 +559,31 @@ def pixel_size_um(path: str | Path) -> tuple[float, float] | None:
     return x, float(ys.group(1)) if ys else x
 
 
-def image_info(path: str | Path) -> ImageInfo:
+def image_info(path: str | Path, *, frame: int | None = None) -> ImageInfo:
     """Width, height, channels and sample type from the file's header, without decoding.
 
     Width and height are those of the image :func:`read_image` returns: an EXIF orientation
     of 5 to 8 (a photograph taken upright, stored on its side) swaps the stored ones.
 
+    Parameters
+    ----------
+    path : str or Path
+        An image file of :data:`IMAGE_FORMATS`.
+    frame : int, optional
+        The image of a file holding several (a TIFF stack, a multi-frame DICOM, an animated
+        GIF or WebP; :func:`image_frames` counts them), from 0, as :func:`read_image` takes it.
+
     Raises
     ------
     InvalidInputError
-        The file is missing or not an image of a known format.
+        The file is missing or not an image of a known format; a file of several images
+        without ``frame``; a ``frame`` out of range.
     """
     fmt = _suffix_format(path) if isinstance(path, (str, os.PathLike)) else ""
     p = _existing(path)
     fmt = _content_format(p, fmt)
+    if frame is not None and fmt not in _FRAMED:
+        _check_frame(p, frame, 1)
     if fmt == "png":
         with p.open("rb") as fh:
             head = _png_header(p, fh.read(33))
@@ -498,7 +597,7 @@ def image_info(path: str | Path) -> ImageInfo:
         tifffile = _tifffile()
         try:
             with tifffile.TiffFile(p) as tif:
-                head = _tiff_series(tif, p)[1]
+                head = _tiff_series(tif, p, frame)[1]
                 tag = tif.pages[0].tags.get(274)
                 return _upright(head, int(tag.value) if tag is not None else 1)
         except InvalidInputError:
@@ -515,12 +614,14 @@ def image_info(path: str | Path) -> ImageInfo:
         from imageform.io import dicom
 
         d = dicom.header(p, dicom.open_dicom(p, pixels=False))
-        if d.frames > 1:  # refused, as read_image refuses it
+        if frame is not None:
+            _check_frame(p, frame, d.frames)
+        elif d.frames > 1:  # refused, as read_image refuses it
             raise dicom.multi_frame(p, d)
         return ImageInfo(d.width, d.height, d.channels, d.dtype, "dicom")
     try:
         with _pillow_open(p) as im:
-            _refuse_animation(p, im, fmt)
+            _pillow_frame(p, im, fmt, frame)
             w, h = im.size
             head = ImageInfo(w, h, _pillow_channels(im, fmt), "uint8", fmt or "jpeg")
             return _upright(head, _pillow_orientation(im))
@@ -588,16 +689,24 @@ def _pillow_open(p: Path) -> Iterator[Any]:
         yield im
 
 
-def _refuse_animation(p: Path, im: Any, fmt: str) -> None:
-    """Refuse an animated GIF or WebP (several frames) in one line, as a stack TIFF is."""
-    if not getattr(im, "is_animated", False):
-        return
-    name = {"gif": "GIF", "webp": "WebP"}.get(fmt, fmt.upper())
-    raise UnreadableFileError(
-        p,
-        f"an animated {name} of {int(im.n_frames)} frames; imageform reads "
-        "one image (save the frame you need as PNG)",
-    )
+def _pillow_frame(p: Path, im: Any, fmt: str, frame: int | None) -> None:
+    """Seek an animated GIF or WebP to ``frame``; refuse one without it, as a stack TIFF is.
+
+    Pillow composes each frame of a GIF over the ones before it (its disposal methods), so a
+    frame comes as the viewer shows it at that point, not as its own patch.
+    """
+    count = int(getattr(im, "n_frames", 1)) if getattr(im, "is_animated", False) else 1
+    if frame is None:
+        if count == 1:
+            return
+        name = {"gif": "GIF", "webp": "WebP"}.get(fmt, fmt.upper())
+        raise UnreadableFileError(
+            p,
+            f"an animated {name} of {count} frames; read one with frame=N, 0 to {count - 1} "
+            "(imageform info and convert: --frame N)",
+        )
+    if _check_frame(p, frame, count):
+        im.seek(int(frame))
 
 
 def _refuse_short_raw(p: Path, im: Any) -> None:
@@ -873,7 +982,7 @@ def _png_decode_interlaced(data: bytes) -> Any:
     return arr
 
 
-def _read_pillow(p: Path, limit: int, fmt: str = "jpeg") -> np.ndarray:
+def _read_pillow(p: Path, limit: int, fmt: str = "jpeg", frame: int | None = None) -> np.ndarray:
     """Decode a JPEG, WebP, BMP or GIF with Pillow, upright (EXIF orientation of JPEG, WebP).
 
     A palette (BMP, GIF) comes as RGB, or RGBA where an index is transparent; a grey GIF with
@@ -882,7 +991,7 @@ def _read_pillow(p: Path, limit: int, fmt: str = "jpeg") -> np.ndarray:
     """
     try:
         with _pillow_open(p) as im:
-            _refuse_animation(p, im, fmt)
+            _pillow_frame(p, im, fmt, frame)
             w, h = im.size
             _check_pixels(p, ImageInfo(w, h, len(im.getbands()), "uint8", fmt), limit)
             _refuse_short_raw(p, im)
@@ -966,11 +1075,33 @@ def _tifffile() -> Any:
     return tifffile
 
 
-def _read_tiff(p: Path, limit: int) -> tuple[np.ndarray, bool]:
+def _tiff_frame(series: Any, path: Path, frame: int | None) -> tuple[np.ndarray, str]:
+    """Decode one image of a TIFF series (``frame`` of a stack, else its one image).
+
+    Returns the samples and their axes (``YX``, ``YXS`` or ``SYX``). A stack stored one page
+    per image (ImageJ, OME, tifffile's pages) decodes that page alone; another layout decodes
+    the series, its memory checked first, and takes the image from it.
+    """
+    axes, shape = series.axes, series.shape
+    plane = "".join(a for a in axes if a in "YXS")
+    stack = [n for a, n in zip(axes, shape, strict=True) if a not in "YXS"]
+    if frame is None or not stack:
+        return np.asarray(series.asarray()), plane
+    if len(series.pages) == math.prod(stack):  # one page per image
+        return np.asarray(series.asarray(key=frame)), str(series.keyframe.axes)
+    need = math.prod(shape) * np.dtype(series.dtype).itemsize
+    check_memory(need, str(path), f"a TIFF series of shape {format_shape(tuple(shape))}")
+    index = np.unravel_index(frame, stack)
+    whole = np.asarray(series.asarray())
+    pick = iter(index)
+    return whole[tuple(next(pick) if a not in "YXS" else slice(None) for a in axes)], plane
+
+
+def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarray, bool]:
     tifffile = _tifffile()
     try:
         with tifffile.TiffFile(p) as tif:
-            series, info = _tiff_series(tif, p)
+            series, info = _tiff_series(tif, p, frame)
             _check_pixels(p, info, limit)
             page = tif.pages[0]
             tag = page.tags.get(274)
@@ -981,7 +1112,7 @@ def _read_tiff(p: Path, limit: int) -> tuple[np.ndarray, bool]:
             bits = int(page.bitspersample)
             colormap = page.colormap if photometric == 3 else None
             _refuse_tiff_color(p, photometric, int(page.compression))
-            arr = np.asarray(series.asarray())
+            arr, axes = _tiff_frame(series, p, frame)
     except InvalidInputError:
         raise
     except MemoryError:
@@ -1102,7 +1233,11 @@ def _normalise(p: Path, arr: np.ndarray, alpha: str, has_alpha: bool) -> np.ndar
 
 
 def read_image(
-    path: str | Path, *, alpha: str = "reject", max_pixels: int | None = None
+    path: str | Path,
+    *,
+    alpha: str = "reject",
+    max_pixels: int | None = None,
+    frame: int | None = None,
 ) -> np.ndarray:
     """Read an image file as ``(H, W, C)``: uint8/uint16 as stored, floats as stored.
 
@@ -1120,6 +1255,12 @@ def read_image(
     max_pixels : int, optional
         Refuse images with more pixels (default :func:`max_pixels`), checked from the header
         before decoding.
+    frame : int, optional
+        The image to read of a file that holds several, from 0: a TIFF stack's (pages,
+        z-planes, time points, channels of their own: the flat index over them, in the
+        file's order, tifffile's ``key``), a multi-frame DICOM's, an animated GIF's or WebP's.
+        :func:`image_frames` counts them. None: the file must hold one image. A file of one
+        image takes ``frame=0``.
 
     Returns
     -------
@@ -1131,7 +1272,8 @@ def read_image(
     InvalidInputError
         Missing, unreadable, truncated or corrupt file; too many pixels; transparent pixels
         with ``alpha="reject"``; an unsupported sample type or shape; a TIFF stack, an
-        animated GIF or WebP or a multi-frame DICOM (more than one image).
+        animated GIF or WebP or a multi-frame DICOM (more than one image) without ``frame``;
+        a ``frame`` out of range.
     UnknownOptionError
         An unknown ``alpha``.
 
@@ -1148,6 +1290,8 @@ def read_image(
     fmt = _suffix_format(path) if isinstance(path, (str, os.PathLike)) else ""
     p = _existing(path)
     fmt = _content_format(p, fmt)
+    if frame is not None and fmt not in _FRAMED:
+        _check_frame(p, frame, 1)
     has_alpha = False
     if fmt == "png":
         arr = _read_png(p, limit)
@@ -1155,15 +1299,15 @@ def read_image(
     elif fmt == "jpeg":
         arr = _read_pillow(p, limit)
     elif fmt in ("webp", "bmp", "gif", "tga", "qoi"):
-        arr = _read_pillow(p, limit, fmt)
+        arr = _read_pillow(p, limit, fmt, frame)
         has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     elif fmt == "tiff":
-        arr, has_alpha = _read_tiff(p, limit)
+        arr, has_alpha = _read_tiff(p, limit, frame)
     elif fmt == "heif":
         arr = _read_heif(p, limit)
         has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     elif fmt == "dicom":
-        arr = _read_dicom(p, limit)
+        arr = _read_dicom(p, limit, frame)
     elif fmt == "netpbm":
         arr, has_alpha = _read_netpbm(p, limit)
     else:
