@@ -1,6 +1,7 @@
-"""The one image reader and writer: PNG, JPEG, TIFF, ``.npy``, PGM/PPM; more formats read.
+"""The one image reader and writer: PNG, JPEG, TIFF, ``.npy``, PGM/PPM, PFM; more formats read.
 
-HEIF, WebP, BMP, GIF, Netpbm (PBM, PAM too), TGA, QOI and DICOM are read, not written.
+HEIF, WebP, BMP, GIF, Netpbm (PBM, PAM too), TGA, QOI, ICO, Radiance HDR and DICOM are read,
+not written.
 
 One rule for every format:
 
@@ -13,16 +14,18 @@ One rule for every format:
 - **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
   (float16 is widened to float32). Other sample types are refused. A TIFF's samples are read
   as the values they mean: a palette through its colour map (RGB), a bilevel image as 0/255,
-  WhiteIsZero inverted; a CMYK, Lab or raw-YCbCr TIFF is refused; a palette BMP or GIF as RGB,
+  WhiteIsZero inverted; a CMYK TIFF as sRGB through its embedded CMYK ICC profile (LittleCMS,
+  8 and 16 bits; without one refused), a Lab or raw-YCbCr TIFF refused; a palette BMP or GIF as RGB,
   a 1-bit BMP as 0/255; a CMYK JPEG as sRGB, through its embedded CMYK ICC profile (LittleCMS)
   where it has one, else ``(1 - C)(1 - K)``. Samples of fewer bits than
   their container (10, 12, 14 bits in uint16) come as stored, the sensor's numbers (DN), as
   tifffile and scikit-image read them: measurements (``emva``, ``characterize``) need them so;
   such an image looks dark until scaled by ``65535 / (2**bits - 1)``.
 - **One image**: a TIFF holding a stack (pages, time points, z-planes) and an animated GIF or
-  WebP are refused in one line saying what they hold, rather than read as their first image;
-  so is a TIFF of more than 4 samples per pixel (multispectral bands), by :func:`image_info`
-  as by :func:`read_image`.
+  WebP are refused in one line saying what they hold and how to pick one, rather than read as
+  their first image; ``frame=N`` reads image ``N`` (:func:`image_frames` counts them). A TIFF
+  of more than 4 samples per pixel (multispectral bands) is refused, by :func:`image_info` as
+  by :func:`read_image`.
 - **Alpha** (grey+alpha, RGBA, a palette with transparency in PNG, GIF or BMP, WebP's alpha;
   extra samples in TIFF):
   dropped when every pixel is opaque; otherwise refused unless ``alpha="drop"`` (ignore it)
@@ -54,7 +57,14 @@ any other maxval scaled to the full range of 8 bits (below 256) or 16, ``round(v
 unlike a 12-bit TIFF's DN, a camera's PGM of maxval 4095 comes scaled: ``v * 4095 / 65535``
 gives its stored numbers back).
 A grey ``.pgm`` or RGB ``.ppm`` is written (binary, maxval 255 or 65535, no profile); the
-others are not (write PNG).
+others are not (write PNG). PFM (``.pfm``, :mod:`imageform.io._pfm`: Middlebury's disparities,
+HDR renderings) is read and written by imageform's own code as float32, grey (``Pf``) or RGB
+(``PF``), the scale's sign the byte order, rows stored bottom-up; the stored numbers are
+returned (as Pillow does; OpenCV divides them by the scale's magnitude), ``inf`` included.
+Radiance HDR (``.hdr``, RGBE, :mod:`imageform.io._hdr`) is read as float32 linear RGB,
+Radiance's ``(m + 0.5) * 2**(E - 136)`` (OpenCV's reader leaves out the ``+ 0.5``), the
+header's ``EXPOSURE`` not divided out; it is not written. ICO is read through Pillow as its
+largest image.
 DICOM (``.dcm``, ``.dicom``, or any file with ``DICM`` at byte 128) is read through pydicom
 (the ``dicom`` extra; :mod:`imageform.io.dicom` states its rules): the stored values through
 the Modality LUT (integers where the rescale is the identity, else float32), MONOCHROME1
@@ -89,7 +99,7 @@ from imageform._validate import (
     shorten,
 )
 from imageform.errors import InvalidInputError, UnreadableFileError
-from imageform.io import _netpbm
+from imageform.io import _hdr, _netpbm, _pfm
 from imageform.io._netpbm import is_netpbm
 
 if TYPE_CHECKING:
@@ -139,11 +149,14 @@ IMAGE_FORMATS = MappingProxyType(
         ".pam": "netpbm",
         ".tga": "tga",
         ".qoi": "qoi",
+        ".pfm": "pfm",
+        ".hdr": "hdr",
+        ".ico": "ico",
     }
 )
 
 #: The formats :func:`write_image` writes (the others of IMAGE_FORMATS are read only).
-_WRITTEN = ("png", "jpeg", "tiff", "npy", "netpbm")
+_WRITTEN = ("png", "jpeg", "tiff", "npy", "netpbm", "pfm")
 #: The Netpbm suffixes written: a binary PGM (grey) or PPM (RGB), 8 or 16 bits.
 _NETPBM_WRITTEN = {".pgm": 1, ".ppm": 3}
 
@@ -170,7 +183,7 @@ class ImageInfo(NamedTuple):
 
     ``width``, ``height`` (upright, as :func:`read_image` returns it), ``channels``, sample
     ``dtype`` and ``format`` (png, jpeg, tiff, npy, heif, webp, bmp, gif, netpbm, tga, qoi,
-    dicom).
+    pfm, hdr, ico, dicom).
     """
 
     width: int
@@ -443,6 +456,9 @@ def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, I
     if frame is not None:
         _check_frame(path, frame, math.prod(n for _, n in stack))
     channels = shape[axes.index("S")] if "S" in axes else 1
+    page = tif.pages[0]
+    if channels in (4, 5) and _tiff_cmyk_profile(page) is not None:  # read as sRGB (+ alpha)
+        channels -= 1
     if channels > 4:  # refused here, so that image_info says what read_image does
         raise UnreadableFileError(
             path,
@@ -453,7 +469,6 @@ def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, I
         )
     width, height = shape[axes.index("X")], shape[axes.index("Y")]
     dtype = "uint8" if series.dtype == np.bool_ else str(series.dtype)  # bilevel: 0/255
-    page = tif.pages[0]
     if int(page.photometric) == 3 and page.colormap is not None:  # palette: RGB, as read
         cmap = np.asarray(page.colormap)
         eight = int(cmap.max(initial=0)) < 256 or not np.any(cmap % 257)
@@ -608,6 +623,15 @@ def image_info(path: str | Path, *, frame: int | None = None) -> ImageInfo:
         with p.open("rb") as fh:
             nh = _netpbm.header(fh.read(1 << 16), p)
         return ImageInfo(nh.width, nh.height, nh.channels, nh.dtype, "netpbm")
+    if fmt == "pfm":
+        with p.open("rb") as fh:
+            ph = _pfm.header(fh.read(256), p)
+        _pfm.check_size(ph, p.stat().st_size, p)  # uncompressed: its size is known
+        return ImageInfo(ph.width, ph.height, ph.channels, "float32", "pfm")
+    if fmt == "hdr":
+        with p.open("rb") as fh:
+            hh = _hdr.header(fh.read(1 << 16), p)
+        return ImageInfo(hh.width, hh.height, 3, "float32", "hdr")
     if fmt == "heif":
         return _heif_info(_open_heif(p))  # libheif's size: its rotation applied
     if fmt == "dicom":
@@ -833,6 +857,12 @@ def _content_format(p: Path, fmt: str) -> str:
         found = "bmp"  # its DIB header's size, so that text starting "BM" is not one
     elif is_netpbm(head):
         found = "netpbm"
+    elif _pfm.is_pfm(head):
+        found = "pfm"
+    elif _hdr.is_hdr(head):
+        found = "hdr"
+    elif head[:4] == b"\0\0\1\0" and fmt == "ico":  # ICONDIR, type 1 (no magic of its own)
+        found = "ico"
     elif head.startswith(b"qoif"):
         found = "qoi"
     elif head.startswith((b"\xff\x0a", b"\0\0\0\x0cJXL ")):
@@ -846,8 +876,8 @@ def _content_format(p: Path, fmt: str) -> str:
             p,
             f"it holds {'an' if found[0] in 'AEIOU' else 'a'} {found} image, "
             f"not {fmt.upper()}; imageform reads "
-            "PNG, JPEG, TIFF, WebP, BMP, GIF, Netpbm, TGA, QOI, .npy, HEIF and DICOM (convert "
-            "it to one of them)",
+            "PNG, JPEG, TIFF, WebP, BMP, GIF, Netpbm, PFM, Radiance HDR, TGA, QOI, ICO, .npy, "
+            "HEIF and DICOM (convert it to one of them)",
         )
     return found
 
@@ -1111,7 +1141,9 @@ def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarra
             photometric = int(page.photometric)
             bits = int(page.bitspersample)
             colormap = page.colormap if photometric == 3 else None
-            _refuse_tiff_color(p, photometric, int(page.compression))
+            cmyk = _tiff_cmyk_profile(page)
+            if cmyk is None:
+                _refuse_tiff_color(p, photometric, int(page.compression))
             arr, axes = _tiff_frame(series, p, frame)
     except InvalidInputError:
         raise
@@ -1121,14 +1153,62 @@ def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarra
         raise UnreadableFileError(p, f"{_one_line(exc)}") from None
     if arr.ndim == 3 and "S" in axes and axes.index("S") < axes.index("Y"):
         arr = np.moveaxis(arr, 0, -1)
+    if cmyk is not None:
+        return _orient(_tiff_cmyk_to_rgb(p, arr, cmyk), orientation), extra > 0
     arr = _tiff_samples(p, arr, photometric, bits, colormap)
     return _orient(arr, orientation), extra > 0
 
 
+def _tiff_cmyk_profile(page: Any) -> bytes | None:
+    """Return the CMYK ICC profile of a CMYK TIFF page (photometric 5, InkSet CMYK), else None.
+
+    Such a page is read through its profile (:func:`_tiff_cmyk_to_rgb`); one without a profile,
+    or with a profile of another colour space, is refused as before (no exact conversion).
+    """
+    if int(page.photometric) != 5 or int(getattr(page, "inkset", 1) or 1) != 1:
+        return None
+    tag = page.tags.get(34675)
+    icc = bytes(tag.value) if tag is not None else b""
+    return icc if len(icc) >= 20 and icc[16:20] == b"CMYK" else None
+
+
+def _tiff_cmyk_to_rgb(p: Path, arr: np.ndarray, profile: bytes) -> np.ndarray:
+    """Convert a CMYK TIFF's samples (uint8 or uint16; alpha after them kept) to sRGB.
+
+    LittleCMS (imagecodecs' ``cms_transform``) from the embedded CMYK profile to LittleCMS's
+    built-in sRGB with the perceptual intent: what :func:`_cmyk_to_rgb` does for a CMYK JPEG
+    through Pillow's ImageCms (the same library; equal codes on 8 bits), here for 16 bits too.
+    TIFF's CMYK is not inverted (0 is no ink), as the profile expects.
+    """
+    import imagecodecs
+
+    if arr.ndim != 3 or arr.shape[-1] not in (4, 5) or arr.dtype not in (np.uint8, np.uint16):
+        raise UnreadableFileError(
+            p, f"a CMYK TIFF of {arr.dtype} samples of shape {arr.shape}; imageform converts "
+            "8 and 16-bit CMYK (+ alpha) through the embedded profile"
+        )  # fmt: skip
+    from PIL import ImageCms
+
+    srgb = ImageCms.ImageCmsProfile(_srgb_cms_profile()).tobytes()
+    try:
+        rgb = imagecodecs.cms_transform(
+            np.ascontiguousarray(arr[..., :4]), profile, srgb, colorspace="cmyk",
+            outcolorspace="rgb", intent=0, outdtype=arr.dtype,
+        )  # fmt: skip
+    except Exception as exc:  # a corrupt or unusable profile
+        raise UnreadableFileError(
+            p, f"its CMYK ICC profile cannot be applied ({_one_line(exc)})"
+        ) from None
+    rgb = np.asarray(rgb).reshape(*arr.shape[:2], 3)
+    if arr.shape[-1] == 5:
+        rgb = np.concatenate([rgb, arr[..., 4:]], axis=-1)
+    return rgb
+
+
 #: TIFF photometric interpretations whose samples are not RGB or grey values (TIFF 6.0,
 #: TIFF-F/FX, libtiff): read as they are stored, they would pass for RGB.
-_TIFF_NOT_RGB = {5: "CMYK (separated)", 8: "CIELab", 9: "ICCLab", 10: "ITULab", 32844: "LogL",
-                 32845: "LogLuv"}  # fmt: skip
+_TIFF_NOT_RGB = {5: "CMYK (separated, no CMYK ICC profile)", 8: "CIELab", 9: "ICCLab",
+                 10: "ITULab", 32844: "LogL", 32845: "LogLuv"}  # fmt: skip
 
 
 def _refuse_tiff_color(p: Path, photometric: int, compression: int) -> None:
@@ -1245,7 +1325,8 @@ def read_image(
     ----------
     path : str or Path
         A ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff``, ``.npy``, ``.webp``, ``.bmp``,
-        ``.gif``, Netpbm (``.pgm``, ``.ppm``, ``.pbm``, ``.pnm``, ``.pam``), ``.tga``, ``.qoi``
+        ``.gif``, Netpbm (``.pgm``, ``.ppm``, ``.pbm``, ``.pnm``, ``.pam``), ``.pfm``,
+        ``.hdr``, ``.tga``, ``.qoi``, ``.ico``
         or HEIF file (:data:`IMAGE_FORMATS`), or a DICOM file under any name (the
         ``dicom`` extra; its values through the Modality LUT, see :func:`read_dicom`).
     alpha : {"reject", "drop", "keep"}
@@ -1310,6 +1391,19 @@ def read_image(
         arr = _read_dicom(p, limit, frame)
     elif fmt == "netpbm":
         arr, has_alpha = _read_netpbm(p, limit)
+    elif fmt == "pfm":
+        with p.open("rb") as fh:
+            ph = _pfm.header(fh.read(256), p)
+        _check_pixels(p, ImageInfo(ph.width, ph.height, ph.channels, "float32", fmt), limit)
+        arr = _pfm.read(p, p.read_bytes())
+    elif fmt == "hdr":
+        with p.open("rb") as fh:
+            hh = _hdr.header(fh.read(1 << 16), p)
+        _check_pixels(p, ImageInfo(hh.width, hh.height, 3, "float32", fmt), limit)
+        arr = _hdr.read(p, p.read_bytes())
+    elif fmt == "ico":
+        arr = _read_pillow(p, limit, fmt)
+        has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     else:
         arr = _read_npy(p, limit)
     return _normalise(p, arr, alpha, has_alpha)
@@ -1505,8 +1599,10 @@ def write_image(
     Parameters
     ----------
     path : str or Path
-        ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff``, ``.npy``, or ``.pgm`` (grey) /
-        ``.ppm`` (RGB): binary Netpbm of maxval 255 or 65535, with no colour profile.
+        ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff``, ``.npy``, ``.pgm`` (grey) /
+        ``.ppm`` (RGB): binary Netpbm of maxval 255 or 65535, with no colour profile, or
+        ``.pfm`` (grey or RGB float32, little-endian; integers as ``v / (2**bits - 1)``; any
+        float stored as it is, no profile).
     image : array_like (H, W) or (H, W, C), C in 1..4
         Floats in [0, 1] (encoded values), uint8 or uint16.
     bit_depth : {8, 16}, optional
@@ -1589,14 +1685,16 @@ def write_image(
     if fmt == "netpbm" and p.suffix.lower() not in _NETPBM_WRITTEN:
         fmt = {".pbm": "PBM", ".pam": "PAM"}.get(p.suffix.lower(), "PNM")  # read only
     if fmt not in _WRITTEN:
-        name = {"heif": "HEIF", "webp": "WebP"}.get(fmt, fmt.upper())
+        name = {"heif": "HEIF", "webp": "WebP", "hdr": "Radiance HDR"}.get(fmt, fmt.upper())
         raise InvalidInputError(
-            f"imageform reads {name} but does not write it; write a .png, .jpg, .tif, .pgm or "
-            ".ppm file"
+            f"imageform reads {name} but does not write it; write a .png, .jpg, .tif, .pgm, "
+            ".ppm or .pfm file"
         )
     if fmt == "npy":
         atomic_write(p, lambda t: np.save(t, a, allow_pickle=False))
         return WrittenImage(None, 0)
+    if fmt == "pfm":
+        return _write_pfm(p, shown, a, bits, color_space)
     if fmt == "tiff":
         tifffile = _tifffile()
         n_out = 0
@@ -1653,6 +1751,34 @@ def write_image(
         icc = {"icc_profile": profile} if profile is not None and rgb else {}
         atomic_write(p, lambda t: Image.fromarray(q).save(t, format="JPEG", quality=quality, **icc))
     return WrittenImage(depth, n_out)
+
+
+def _write_pfm(
+    p: Path, shown: Path, a: np.ndarray, bits: int | None, color_space: str | None
+) -> WrittenImage:
+    """Write a grey (``Pf``) or RGB (``PF``) PFM: float32, little-endian, rows bottom-up.
+
+    Floats are stored as they are (values above 1, negative disparities, ``inf`` included);
+    uint8 and uint16 as the encoded values they mean, ``v / (2**bits - 1)``.
+    """
+    have = a.shape[-1] if a.ndim == 3 else 1
+    if have not in (1, 3):
+        kind = {2: "grey with alpha", 4: "RGB with alpha"}[have]
+        raise InvalidInputError(
+            f"PFM holds grey or RGB images, this one is {kind}; write {shown.stem}.tif"
+        )
+    if bits is not None:
+        raise InvalidInputError(f"PFM stores float32 samples: bit_depth {bits} has no meaning")
+    if color_space is not None and str(color_space).strip().lower() != "srgb":
+        raise InvalidInputError(
+            f"PFM has no colour profile; write {shown.stem}.tif to declare {color_space}"
+        )
+    if a.dtype.kind == "u":
+        if a.dtype not in (np.uint8, np.uint16):
+            raise InvalidInputError(f"expected floats, uint8 or uint16 to write {p}, got {a.dtype}")
+        a = a.astype(np.float32) / np.float32(np.iinfo(a.dtype).max)
+    atomic_write(p, lambda t: t.write_bytes(_pfm.encode(a)))
+    return WrittenImage(None, 0)
 
 
 def _with_iccp(png: bytes, profile: bytes) -> bytes:
@@ -1723,7 +1849,7 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     if not p.is_file():
         raise UnreadableFileError(p, "no such file")
     fmt = _content_format(p, fmt)
-    if fmt in ("npy", "netpbm"):
+    if fmt in ("npy", "netpbm", "pfm", "hdr"):
         return DeclaredColorSpace(None, "none", "")
     if fmt == "bmp":
         icc_bmp = _bmp_profile(p)
@@ -1746,8 +1872,12 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
                 tag = page.tags.get(34675)
                 icc_tiff = bytes(tag.value) if tag is not None else b""
                 description = page.description
+                cmyk_tiff = _tiff_cmyk_profile(page) is not None
         except Exception as exc:
             raise UnreadableFileError(p, f"{_one_line(exc)}") from None
+        if cmyk_tiff:  # read_image converts it through its profile to sRGB
+            desc = parse_icc(icc_tiff).description
+            return DeclaredColorSpace("srgb", "icc", f"{desc} (CMYK, read as sRGB)")
         if icc_tiff:
             return declared_by_profile(icc_tiff)
         recorded = _recorded_space(description)

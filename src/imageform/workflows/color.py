@@ -232,9 +232,10 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
         from imageform.io.icc import RGB_PROFILED
 
         fmt = image_format(path)
-        if fmt == "netpbm" and self.dst in RGB_PROFILED and self.dst != "srgb":
+        if fmt in ("netpbm", "pfm") and self.dst in RGB_PROFILED and self.dst != "srgb":
+            name = "Netpbm" if fmt == "netpbm" else "PFM"
             raise InvalidInputError(
-                f"Netpbm has no colour profile to declare {self.dst}: write {path.stem}.png or "
+                f"{name} has no colour profile to declare {self.dst}: write {path.stem}.png or "
                 f"{path.stem}.tif"
             )
         if fmt in ("png", "jpeg", "netpbm") and self.dst not in _DISPLAYABLE:
@@ -901,8 +902,8 @@ def palette_check(run: Run, opts: PaletteCheckOptions, *, out: None, colors: str
 
 _IMG = Input(
     "image",
-    "Input image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, PGM/PPM/PBM/PAM, TGA, QOI; HEIF with "
-    "the heif extra, DICOM with the dicom extra).",
+    "Input image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, PGM/PPM/PBM/PAM, PFM, Radiance HDR, "
+    "TGA, QOI, ICO; HEIF with the heif extra, DICOM with the dicom extra).",
 )
 
 
@@ -1153,8 +1154,8 @@ WORKFLOWS = (
         (
             Input(
                 "image",
-                "Image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, PGM/PPM, TGA, QOI, HEIF, DICOM) "
-                "or raw file (DNG, CR2 ...).",
+                "Image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, PGM/PPM, PFM, HDR, TGA, QOI, ICO, "
+                "HEIF, DICOM) or raw file (DNG, CR2 ...).",
             ),
         ),
         None,
