@@ -17,6 +17,9 @@ the table prints and checks) goes through
 - ``white-balance`` (PNG), ``stain-normalize --method macenko``, ``sfr``, ``chart``,
   ``develop``: a result or one line;
 - ``chunked convert --to lab``: the same Lab as ``convert`` (to 1e-3);
+- ``frame 0``: ``convert --frame 0 --to lab`` (TIFF): a file of several images (a TIFF
+  stack, an animated GIF) converts its first; a file of one image the same Lab as
+  ``convert``'s (to 1e-6);
 - ``batch convert 'FOLDER/*' --to lab``, once for the folder (its own temporary folder must
   stay empty): each file's Lab checked as ``convert``'s, and the same outcome;
 - ``bad options``: ``convert --to nonsense`` and ``white-balance --method nonsense``: exit 2,
@@ -73,6 +76,7 @@ CLASSES = (
     "develop",
     "batch convert",
     "chunked convert",
+    "frame 0",
     "bad options",
 )
 
@@ -246,6 +250,14 @@ def sweep_file(path: Path) -> list[dict[str, Any]]:
         elif v == "fine" and not lab.is_file():
             v, n = "wrong", "chunked convert wrote what convert refused"
         add("chunked convert", v, n, sec, chunk)
+
+        first = out / "frame0.tif"
+        v, n, sec, _ = _step(["convert", s, "--frame", "0", "--to", "lab", "-o", str(first)])
+        if v == "fine" and lab.is_file():
+            a, b = _read_tif(first), _read_tif(lab)
+            if a.shape != b.shape or not np.allclose(a, b, atol=1e-6, equal_nan=True):
+                v, n = "wrong", "--frame 0 of a file of one image differs from convert's"
+        add("frame 0", v, n, sec, first)
 
         bad = out / "bad.png"
         v1, n1, sec1, _ = _step(["convert", s, "--to", "nonsense", "-o", str(bad)])

@@ -164,7 +164,7 @@ def test_hdr_written_by_opencv_is_radiance_s_values_and_half_a_step_from_opencv(
     np.testing.assert_allclose(got - cv, np.broadcast_to(half, got.shape), rtol=1e-5, atol=0)
     step = np.where(e > 0, np.ldexp(1.0, e - 136), 0.0)[..., None]  # RGBE's precision
     assert np.all(np.abs(got - big) <= step)
-    assert image_color_space(p).name is None
+    assert image_color_space(p)[:2] == ("linear_srgb", "radiance")
 
 
 @pytest.mark.parametrize(
@@ -223,3 +223,21 @@ def test_a_bad_hdr_is_one_line_and_nothing_is_written(
 def test_hdr_is_read_not_written(tmp_path: Path) -> None:
     with pytest.raises(InvalidInputError, match="reads Radiance HDR but does not write it"):
         write_image(tmp_path / "a.hdr", HDR_RGB)
+
+
+def test_hdr_declares_linear_srgb_unless_its_primaries_differ(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rgbe = np.full((2, 3, 4), 128, np.uint8)
+    p = tmp_path / "p.hdr"
+    head = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n%s\n-Y 2 +X 3\n"
+    p.write_bytes(head % b"" + rgbe.tobytes())
+    assert image_color_space(p)[:2] == ("linear_srgb", "radiance")
+    out = tmp_path / "o.png"
+    assert main(["convert", str(p), "-o", str(out)]) == 0  # --from auto: linear -> sRGB codes
+    assert "declares linear_srgb in its Radiance HDR header" in capsys.readouterr().err
+    np.testing.assert_array_equal(read_image(out), np.full((2, 3, 3), 188, np.uint8))  # 0.50196
+    p.write_bytes(head % b"PRIMARIES=0.708 0.292 0.170 0.797 0.131 0.046 0.3127 0.329\n"
+                  + rgbe.tobytes())  # fmt: skip
+    declared = image_color_space(p)
+    assert declared.name is None and "PRIMARIES=0.708" in declared.description

@@ -67,6 +67,34 @@ def header(data: bytes, path: Path) -> Header:
     return Header(width, height, (s1 + a1, s2 + a2), stop + 1)
 
 
+#: Rec. 709's primaries (x, y of R, G, B), Radiance's default ``STDPRIMS`` (its white, 1/3,
+#: 1/3, is the equal-energy one; RGB (1, 1, 1) is white either way, as sRGB's is).
+_REC709 = (0.640, 0.330, 0.300, 0.600, 0.150, 0.060)
+
+
+def declared(data: bytes, path: Path) -> tuple[str | None, str]:
+    """Return the space a Radiance header declares, and how it says so.
+
+    ``linear_srgb`` unless its ``PRIMARIES=`` line names primaries other than Rec. 709's
+    (then None, the line quoted).
+    """
+    header(data, path)  # refuses what is no Radiance file
+    end = data.find(b"\n\n")
+    for line in data[:end].split(b"\n"):
+        key, _, value = line.partition(b"=")
+        if key.strip() != b"PRIMARIES":
+            continue
+        try:
+            xy = [float(v) for v in value.split()]
+        except ValueError:
+            xy = []
+        text = value.strip().decode("ascii", "replace")[:80]
+        if len(xy) == 8 and all(abs(a - b) < 0.005 for a, b in zip(xy, _REC709, strict=False)):
+            return "linear_srgb", f"linear RGB, PRIMARIES={text}"
+        return None, f"linear RGB of PRIMARIES={text}, no space of imageform"
+    return "linear_srgb", "linear RGB, Rec. 709 primaries (no PRIMARIES line)"
+
+
 def _truncated(path: Path, row: int, rows: int) -> UnreadableFileError:
     return UnreadableFileError(path, f"the file is truncated (scanline {row} of {rows})")
 

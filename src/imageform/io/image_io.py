@@ -1809,7 +1809,9 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     uncalibrated with the interoperability index ``R03`` (Adobe RGB, the DCF option camera
     JPEGs use); a TIFF without a profile whose ImageDescription JSON names a space under
     ``imageform_color_space`` (what :func:`write_image` records for a space without a
-    profile: ``lab``, ``xyz`` ...; source ``tiff-description``). A profile imageform does not
+    profile: ``lab``, ``xyz`` ...; source ``tiff-description``); a Radiance HDR file's linear
+    RGB, ``linear_srgb`` (Rec. 709 primaries, Radiance's default) unless its ``PRIMARIES=``
+    line gives others (then None; source ``radiance``). A profile imageform does not
     recognise gives ``name`` None with its description; ``.npy`` files and files that
     declare nothing give ``(None, "none", "")``.
 
@@ -1849,8 +1851,12 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     if not p.is_file():
         raise UnreadableFileError(p, "no such file")
     fmt = _content_format(p, fmt)
-    if fmt in ("npy", "netpbm", "pfm", "hdr"):
+    if fmt in ("npy", "netpbm", "pfm"):
         return DeclaredColorSpace(None, "none", "")
+    if fmt == "hdr":
+        with p.open("rb") as fh:
+            name, said = _hdr.declared(fh.read(1 << 16), p)
+        return DeclaredColorSpace(name, "radiance", said)
     if fmt == "bmp":
         icc_bmp = _bmp_profile(p)
         if icc_bmp:

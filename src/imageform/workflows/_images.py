@@ -475,6 +475,7 @@ def declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
                 "png-gama": f"its PNG gAMA/cHRM chunks ({declared.description})",
                 "png-chrm": f"its PNG cHRM chunk ({declared.description})",
                 "tiff-description": "its TIFF description (written by imageform)",
+                "radiance": "its Radiance HDR header (linear RGB)",
             }.get(declared.source, "its EXIF tags")
             run.note(f"note: {image} declares {declared.name} in {how}; read as {declared.name}"
                      " (--from overrides)")  # fmt: skip
