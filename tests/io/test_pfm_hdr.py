@@ -241,3 +241,9 @@ def test_hdr_declares_linear_srgb_unless_its_primaries_differ(
                   + rgbe.tobytes())  # fmt: skip
     declared = image_color_space(p)
     assert declared.name is None and "PRIMARIES=0.708" in declared.description
+    for stated in (
+        b"0.64 0.33 0.30 0.60 0.15 0.06 0.3127 0.329",  # Rec. 709 / sRGB
+        b"0.6400 0.3300 0.2900 0.6000 0.1500 0.0600 0.3333 0.3333",
+    ):  # Radiance's
+        p.write_bytes(head % (b"PRIMARIES= " + stated + b"\n") + rgbe.tobytes())  # fmt: skip
+        assert image_color_space(p).name == "linear_srgb"

@@ -67,16 +67,19 @@ def header(data: bytes, path: Path) -> Header:
     return Header(width, height, (s1 + a1, s2 + a2), stop + 1)
 
 
-#: Rec. 709's primaries (x, y of R, G, B), Radiance's default ``STDPRIMS`` (its white, 1/3,
-#: 1/3, is the equal-energy one; RGB (1, 1, 1) is white either way, as sRGB's is).
+#: Rec. 709's primaries (x, y of R, G, B), and Radiance's default ``STDPRIMS`` (``color.h``:
+#: "CCIR-709" as Radiance states it, green at x 0.290 where Rec. 709 has 0.300; its white,
+#: 1/3, 1/3, is the equal-energy one). Both are read as ``linear_srgb``: RGB (1, 1, 1) is
+#: white either way, and a file without a PRIMARIES line means Radiance's.
 _REC709 = (0.640, 0.330, 0.300, 0.600, 0.150, 0.060)
+_STDPRIMS = (0.640, 0.330, 0.290, 0.600, 0.150, 0.060)
 
 
 def declared(data: bytes, path: Path) -> tuple[str | None, str]:
     """Return the space a Radiance header declares, and how it says so.
 
-    ``linear_srgb`` unless its ``PRIMARIES=`` line names primaries other than Rec. 709's
-    (then None, the line quoted).
+    ``linear_srgb`` unless its ``PRIMARIES=`` line names primaries other than Rec. 709's or
+    Radiance's standard ones (then None, the line quoted).
     """
     header(data, path)  # refuses what is no Radiance file
     end = data.find(b"\n\n")
@@ -89,8 +92,11 @@ def declared(data: bytes, path: Path) -> tuple[str | None, str]:
         except ValueError:
             xy = []
         text = value.strip().decode("ascii", "replace")[:80]
-        if len(xy) == 8 and all(abs(a - b) < 0.005 for a, b in zip(xy, _REC709, strict=False)):
-            return "linear_srgb", f"linear RGB, PRIMARIES={text}"
+        for primaries in (_REC709, _STDPRIMS):
+            if len(xy) == 8 and all(
+                abs(a - b) < 0.005 for a, b in zip(xy[:6], primaries, strict=True)
+            ):
+                return "linear_srgb", f"linear RGB, PRIMARIES={text}"
         return None, f"linear RGB of PRIMARIES={text}, no space of imageform"
     return "linear_srgb", "linear RGB, Rec. 709 primaries (no PRIMARIES line)"
 
