@@ -456,7 +456,7 @@ def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, I
     if frame is not None:
         _check_frame(path, frame, math.prod(n for _, n in stack))
     channels = shape[axes.index("S")] if "S" in axes else 1
-    page = tif.pages[0]
+    page = _frame_page(tif, series, frame)
     if channels in (4, 5) and _tiff_cmyk_profile(page) is not None:  # read as sRGB (+ alpha)
         channels -= 1
     if channels > 4:  # refused here, so that image_info says what read_image does
@@ -1105,6 +1105,23 @@ def _tifffile() -> Any:
     return tifffile
 
 
+def _frame_page(tif: Any, series: Any, frame: int | None) -> Any:
+    """Return the page whose tags describe image ``frame`` of a series (else the first page).
+
+    Pages of a stack share their shape and sample type but may each have their own colour
+    map (a palette per page), photometric or orientation: a stack stored a page per image
+    takes that page's. A page tifffile loads as a TiffFrame (no tags of its own) is described
+    by its key frame.
+    """
+    if frame is None or not frame:
+        return tif.pages[0]
+    stack = [n for a, n in zip(series.axes, series.shape, strict=True) if a not in "YXS"]
+    if len(series.pages) != math.prod(stack):
+        return tif.pages[0]
+    page = series.pages[frame]
+    return page if hasattr(page, "tags") else series.keyframe
+
+
 def _tiff_frame(series: Any, path: Path, frame: int | None) -> tuple[np.ndarray, str]:
     """Decode one image of a TIFF series (``frame`` of a stack, else its one image).
 
@@ -1133,7 +1150,7 @@ def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarra
         with tifffile.TiffFile(p) as tif:
             series, info = _tiff_series(tif, p, frame)
             _check_pixels(p, info, limit)
-            page = tif.pages[0]
+            page = _frame_page(tif, series, frame)
             tag = page.tags.get(274)
             orientation = int(tag.value) if tag is not None else 1
             axes = series.axes
