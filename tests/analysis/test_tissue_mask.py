@@ -575,3 +575,76 @@ def test_stain_normalize_passes_the_files_pixel_size_um(tmp_path: Path) -> None:
     opts = StainNormalizeOptions(target=fine)
     assert _stain_mask(opts, img8, path=fine)[504, 520]
     assert _stain_mask(opts, img8) == "auto"  # no file: the estimator's own mask
+
+
+def _ink_pair() -> tuple[np.ndarray, np.ndarray]:
+    """smujiang/WSIPenMarkingRemoval's pair (tests/data/stain/README.md): the same H&E tissue
+    scanned clean and after blue ink was laid over the whole patch (half of it glass)."""
+    pair = _read("smujiang_inkpair_39952_41440.jpg")
+    return pair[:, :256], pair[:, 256:]
+
+
+def test_ink_over_a_whole_patch_keeps_the_tissue_under_it() -> None:
+    """A wash of ink: every pixel is ink over something, and the region rules called the
+    whole patch ink (0 % of the tissue kept before). By Beer-Lambert the ink's OD is a
+    multiple of one direction: the part of a pixel's OD across it is the tissue's. The ink
+    over the glass goes, the tissue under the ink stays."""
+    clean, inked = _ink_pair()
+    truth = tissue_mask(clean, pen=False, dark=False)  # the clean scan's tissue
+    assert 0.3 < (~truth).mean() < 0.7  # half glass
+    keep = tissue_mask(inked)
+    assert keep[truth].mean() > 0.75  # 0.82 (main: 0.00)
+    assert keep[~truth].mean() < 0.25  # the ink over glass: 0.16 (misregistration included)
+    # the clean scan is no wash: as before
+    assert tissue_mask(clean)[truth].mean() > 0.99
+
+
+def test_stain_estimators_refuse_a_patch_under_ink() -> None:
+    """Each pixel of a washed patch holds the ink's OD: the estimators' default mask leaves
+    every pixel out (main: Macenko's stains 21.5 deg from the clean scan's, silently)."""
+    from imageform.errors import DegenerateConfigurationError
+
+    clean, inked = _ink_pair()
+    with pytest.raises(DegenerateConfigurationError, match="tissue mask left out"):
+        macenko_stains(inked)
+    macenko_stains(inked, mask=None)  # the algorithm alone still runs
+    macenko_stains(clean)
+
+
+def test_pale_stain_without_glass_is_no_wash() -> None:
+    """A tile of pale tissue tinted blue at its brightest (hematoxylin: OD_B >= 0.28 OD_R)
+    is no wash: the region rules judge it as before."""
+    from imageform.analysis._tissue_rules import _bright_end, _washed
+
+    od = np.array([0.45, 0.40, 0.16]) * np.random.default_rng(0).uniform(1.0, 2.0, (64, 64, 1))
+    img = np.clip(np.round(240 * np.exp(-od)), 0, 255).astype(np.uint8)
+    hi = _bright_end(img / 255.0)
+    assert np.log(hi[2] / hi[0]) > 0.2  # tinted as a wash is ...
+    assert not _washed(hi, np.log(np.full(3, 240 / 255)))  # ... but hematoxylin's colour
+    assert tissue_mask(img, i0=240 / 255).mean() > 0.99
+
+
+def test_wash_of_green_ink_over_a_real_tile() -> None:
+    """Green ink (HistoQC's marker) over the whole TIAToolbox crop, twice as thick on its
+    right half: the tissue stays, the glass strip under the ink goes."""
+    img = _read("tiatoolbox_colon_crop.png")
+    truth = tissue_mask(img, pen=False, dark=False)
+    thick = np.where(np.arange(img.shape[1]) < 128, 0.5, 1.0)[None, :, None]
+    t = INK["green"][None, None, :] ** thick
+    inked = np.clip(np.round(img * t), 0, 255).astype(np.uint8)
+    keep = tissue_mask(inked, i0=GLASS / 255)
+    assert keep[truth].mean() > 0.9
+    assert keep[~truth].mean() < 0.1
+
+
+def test_a_wash_is_judged_image_by_image() -> None:
+    """In a batch the washed image is judged alone, the clean one as before; Dask in one
+    chunk gives the same mask (a wash is found chunk by chunk)."""
+    da = pytest.importorskip("dask.array")
+    clean, inked = _ink_pair()
+    i0 = np.full(3, 240 / 255)
+    both = tissue_mask(np.stack([clean, inked]), i0=i0)
+    assert np.array_equal(both[0], tissue_mask(clean, i0=i0))
+    assert np.array_equal(both[1], tissue_mask(inked, i0=i0))
+    lazy = tissue_mask(da.from_array(inked, chunks=(256, 256, 3)))
+    assert np.array_equal(np.asarray(lazy.compute()), tissue_mask(inked))

@@ -34,6 +34,26 @@ def test_plan_keeps_relative_folders(tmp_path: Path) -> None:
     assert [j.output.relative_to(tmp_path / "out").as_posix() for j in jobs] == ["y.tif"]
 
 
+def test_plan_takes_a_folder_and_a_kind_the_command_writes(tmp_path: Path) -> None:
+    """A folder stands for its files (not its sub-folders' nor hidden ones); with ``writes``,
+    an input of a suffix the command does not write (a raw file, a WebP) gets the first of
+    them, the others keep theirs; ``out_suffix`` still wins."""
+    _tree(tmp_path)
+    (tmp_path / "in" / "r.dng").write_bytes(b"")
+    (tmp_path / "in" / ".hidden.png").write_bytes(b"")
+    jobs = plan_jobs(str(tmp_path / "in"), tmp_path / "out", writes=(".png", ".tif"))
+    names = sorted(j.output.relative_to(tmp_path / "out").as_posix() for j in jobs)
+    assert names == ["r.png", "x.png"]
+    jobs = plan_jobs(f"{tmp_path}/in", tmp_path / "out", out_suffix=".tif", writes=(".png",))
+    assert sorted(j.output.name for j in jobs) == ["r.tif", "x.tif"]
+    assert [j.output.name for j in plan_jobs(f"{tmp_path}/in/r.dng", tmp_path / "o")] == ["r.dng"]
+    with pytest.raises(InvalidInputError, match="expected writes as file suffixes"):
+        plan_jobs(str(tmp_path / "in"), tmp_path / "out", writes=("png",))
+    (tmp_path / "in" / "x.dng").write_bytes(b"")  # x.png and x.dng would both write x.png
+    with pytest.raises(InvalidInputError, match="would both write"):
+        plan_jobs(str(tmp_path / "in"), tmp_path / "out", writes=(".png",))
+
+
 def test_plan_refuses_outputs_over_inputs(tmp_path: Path) -> None:
     _tree(tmp_path)
     with pytest.raises(InvalidInputError, match="overwrite an input or match the input glob"):
@@ -155,3 +175,21 @@ def test_runner_exports_the_plan_names_from_one_list() -> None:
     assert len(runner.__all__) == len(set(runner.__all__))
     for name in runner.__all__:
         assert getattr(runner, name) is getattr(batch, name)
+
+
+def test_batch_develop_takes_a_folder_of_raw_files(tmp_path: Path) -> None:
+    """``imageform batch develop FOLDER -o OUT``: the folder's raw files are developed to .png
+    (a raw suffix is one develop does not write), which the next command reads."""
+    from imageform.io import write_dng
+
+    rng = np.random.default_rng(3)
+    cm = [[1.2, -0.3, -0.1], [-0.4, 1.3, 0.1], [-0.05, 0.2, 0.6]]
+    (tmp_path / "raw").mkdir()
+    mosaic = rng.integers(200, 3000, size=(128, 192)).astype(np.uint16)
+    write_dng(tmp_path / "raw" / "a.dng", mosaic, black_level=64, white_level=4095, color_matrix=cm)
+    report = run_batch("develop", str(tmp_path / "raw"), tmp_path / "out", {}, n_workers=1)
+    assert report.ok, report
+    (out,) = sorted((tmp_path / "out").glob("*.png"))
+    assert out.name == "a.png" and not list((tmp_path / "out").glob("*.dng"))
+    img = read_image(out)
+    assert img.shape == (128, 192, 3)

@@ -42,6 +42,22 @@ def test_a_job_writes_its_temporary_in_place(
     assert sorted(p.name for p in out.parent.iterdir()) == ["a.tif"]
 
 
+def test_a_failed_job_leaves_no_folder_it_made(tmp_path: Path) -> None:
+    """A job whose input cannot be read removes the output folders it created (innermost
+    first) and leaves a folder that was there, and another job's file, alone."""
+    (tmp_path / "bad.png").write_bytes(b"not a png")
+    out = tmp_path / "new" / "deeper" / "a.tif"
+    res = run_job("convert", str(tmp_path / "bad.png"), str(out), {"to": "rec2020"}, 0.0, None)
+    assert not res["ok"] and "bad.png" in res["error"]
+    assert not (tmp_path / "new").exists()
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    (kept / "other.txt").write_text("x")
+    res = run_job("convert", str(tmp_path / "bad.png"), str(kept / "b" / "a.tif"), None, 0.0, None)
+    assert not res["ok"]
+    assert sorted(p.name for p in kept.iterdir()) == ["other.txt"]
+
+
 def test_outputs_and_atomic_write_do_not_nest(tmp_path: Path) -> None:
     """A single command: Outputs' temporary file is written in place by atomic_write."""
     final = tmp_path / "x.png"

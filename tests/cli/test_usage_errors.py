@@ -26,9 +26,8 @@ from imageform.cli import main
             "imageform: error: No such command 'no-such-command'. (see 'imageform --help')",
         ),
         (
-            ["calibrate", "a.png", "-o", "cam.toml"],
-            "imageform calibrate: error: Missing option '--board'. "
-            "(see 'imageform calibrate --help')",
+            ["track", "v.mp4", "-o", "poses.csv"],
+            "imageform track: error: Missing option '--camera'. (see 'imageform track --help')",
         ),
         (
             ["batch", "no-such-command"],

@@ -1596,7 +1596,11 @@ VALID.update(
         "imageform.io.read_raw": Skip("needs a raw file and the raw extra (tests/io/test_raw.py)"),
         "imageform.io.write_dng": Skip("writes a file; its checks: tests/io/test_raw.py"),
         "imageform.report.html_parts.page_jpeg": call(np.full((6, 8, 3), 128, dtype=np.uint8)),
+        "imageform.simulate.simulated_baseline_exposure": Skip("takes a whole SimulationResult"),
         "imageform.simulate.simulated_color_matrix": Skip("takes a whole SimulationResult"),
+        "imageform.simulate.simulated_vignette_opcode": Skip(
+            "takes a whole Scene; its law: tests/io/test_raw.py"
+        ),
         "imageform.simulate.write_simulated_dng": Skip("takes a whole SimulationResult"),
         "imageform.workflows.raw.DevelopOptions": call(),
         "imageform.workflows.raw.DevelopOptions.fields": call(),

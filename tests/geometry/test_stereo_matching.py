@@ -22,6 +22,7 @@ from imageform.geometry import (
     stereo_disparity,
     stereo_rectify,
 )
+from imageform.geometry import stereo_matching as sm
 from imageform.geometry.stereo_matching import _grey, _match, _plane_fill
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -725,3 +726,71 @@ def test_bad_input_is_refused_in_one_line(small) -> None:  # type: ignore[no-unt
             with pytest.raises(InvalidInputError) as info:
                 fn(d, Q)
             assert needle in str(info.value)
+
+
+def _flat_square_scene() -> tuple[np.ndarray, np.ndarray, tuple[slice, slice], np.ndarray]:
+    """Texture everywhere but a flat square (its 5 x 5 flat part 26 x 36), and a plane."""
+    h, w = 200, 300
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    rng = np.random.default_rng(2)
+    grey = rng.uniform(0, 255, (h, w)).astype(np.float32)
+    grey[60:90, 100:140] = 128.0
+    flat = (slice(62, 88), slice(102, 138))
+    plane = (5.0 + 0.05 * x - 0.02 * y).astype(np.float32)
+    return grey, plane, flat, rng.uniform(-2.0, 2.0, (h, w))
+
+
+def test_plane_fill_refits_on_the_regions_own_disparities_near_the_plane(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A region matched 0.6 px off its rim's plane (a curved surface's faint texture) pulls
+    the plane toward it; PLANE_REFIT = 0 gives the rim's plane as it was."""
+    grey, plane, flat, _ = _flat_square_scene()
+    disp = plane.copy()
+    disp[flat] += 0.6
+    out = _plane_fill(disp, grey, 0, 16)
+    shift = float(np.mean(out[flat] - plane[flat]))
+    assert 0.2 < shift < 0.6  # measured 0.42: the fit of the rim's and the square's pixels
+    monkeypatch.setattr(sm, "PLANE_REFIT", 0)
+    np.testing.assert_allclose(_plane_fill(disp, grey, 0, 16)[flat], plane[flat], atol=1e-3)
+
+
+def test_plane_fill_keeps_a_region_whose_faint_texture_the_plane_misplaces(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The square's faint texture (under 3 grey levels) is matched at 7 px, its rim says
+    otherwise: warped by the plane the right image no longer fits the square's pixels, so
+    the region keeps its matched disparities; without the right image the plane is taken."""
+    grey, plane, flat, faint = _flat_square_scene()
+    grey[60:90, 100:140] += faint[60:90, 100:140].astype(np.float32)
+    right = np.roll(grey, -7, axis=1)  # every pixel at 7 px
+    disp = plane.copy()
+    disp[flat] = 7.0
+    np.testing.assert_array_equal(_plane_fill(disp, grey, 0, 16, right), disp)
+    np.testing.assert_allclose(_plane_fill(disp, grey, 0, 16)[flat], plane[flat], atol=1e-3)
+    monkeypatch.setattr(sm, "PLANE_PHOTO", np.inf)
+    np.testing.assert_allclose(_plane_fill(disp, grey, 0, 16, right)[flat], plane[flat], atol=1e-3)
+    # a textureless square (noise alone, 7 px everywhere): the plane is taken
+    noise = grey.copy()
+    noise[60:90, 100:140] = 128.0
+    flat_right = np.roll(noise, -7, axis=1)
+    flat_right[60:90, 93:133] += faint[:30, :40].astype(np.float32)  # the right camera's noise
+    monkeypatch.undo()
+    np.testing.assert_allclose(
+        _plane_fill(disp, noise, 0, 16, flat_right)[flat], plane[flat], atol=1e-3
+    )
+
+
+def test_plane_fill_keeps_a_region_whose_plane_would_hide_matched_texture(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A rim at 20 px about a square in a scene at 5 px: on the plane the square's left part
+    lands on right pixels that textured pixels at 5 px claim (seen by the right camera), so
+    the plane would stand in front of them; the region keeps its matched disparities."""
+    grey, _, flat, _ = _flat_square_scene()
+    disp = np.full(grey.shape, 5.0, dtype=np.float32)
+    disp[57:93, 97:143] = 20.0  # the rim
+    disp[flat] = 7.0
+    np.testing.assert_array_equal(_plane_fill(disp, grey, 0, 16), disp)
+    monkeypatch.setattr(sm, "PLANE_HIDE", np.inf)
+    np.testing.assert_allclose(_plane_fill(disp, grey, 0, 16)[flat], 20.0, atol=1e-3)

@@ -352,6 +352,11 @@ _CASES = [
         InvalidInputError,
         r"not valid TOML",
     ),
+    (  # tomllib raises ValueError past Python's 4300-digit integer limit
+        "fx = " + "1" * 5000 + "\n",
+        InvalidInputError,
+        r"not valid TOML: Exceeds the limit \(4300 digits\)",
+    ),
 ]
 
 
@@ -370,6 +375,23 @@ def test_errors_name_the_file_and_the_key(
 def test_missing_file(tmp_path: Path) -> None:
     with pytest.raises(InvalidInputError, match=r"camera file .*nope.toml does not exist"):
         read_camera(tmp_path / "nope.toml")
+
+
+def test_odd_paths_are_refused_in_one_line(tmp_path: Path) -> None:
+    """A FIFO, a folder and a name the file system refuses: one line, the name shortened."""
+    import os
+
+    fifo = tmp_path / "cam.toml"
+    os.mkfifo(fifo)
+    with pytest.raises(InvalidInputError, match=r"cam.toml is a FIFO"):
+        read_camera(fifo)
+    with pytest.raises(InvalidInputError, match=r"is a folder"):
+        read_camera(tmp_path)
+    long = tmp_path / ("x" * 300 + ".toml")
+    with pytest.raises(InvalidInputError) as info:
+        read_camera(long)
+    msg = str(info.value)
+    assert "\n" not in msg and len(msg) < 200 and "xxx..." in msg
 
 
 def test_writing_is_atomic(tmp_path: Path) -> None:

@@ -157,6 +157,25 @@ _STROKE_CORE = 0.08
 #: How far the stroke reaches past the window centers that pass (a stroke's blended edge).
 _STROKE_REACH = 1
 
+#: Ink over a whole image (a wash: smujiang/WSIPenMarkingRemoval's blue-marked patches).
+#: The brightest pixels are then ink over glass, tinted: the _WASH_PERCENTILE-th percentile
+#: of each channel (a robust maximum, on every _WASH_STRIDE-th pixel of each side) has
+#: ln(I_B / I_R) or ln(I_G / I_R) >= _WASH_TINT (blue-marked patches of the tuning half
+#: 0.25-1.25; glass and pale stain of 40 clean tiles and thumbnails at most 0.10). Every
+#: pixel is ink over something there, and the region rules would call the whole image ink.
+#: Ink is one absorber: by Beer-Lambert its OD is a multiple of one direction u, whatever
+#: its thickness, so the OD's part across u, ||OD - (OD . u) u||, is the tissue's alone
+#: (ink over glass: near 0). A pixel whose part across u is under _WASH_RESIDUAL (Macenko's
+#: beta) is ink (or glass) only; the rest is tissue under the ink. u: the median direction
+#: of the pen flags in the lowest _WASH_LOW of OD_G / OD_R (tissue under the ink adds
+#: green OD), or the bright end's own OD with fewer than _WASH_MIN_FLAGS flags.
+_WASH_TINT = 0.2
+_WASH_PERCENTILE = 99.0
+_WASH_STRIDE = 4
+_WASH_RESIDUAL = 0.15
+_WASH_LOW = 30.0
+_WASH_MIN_FLAGS = 64
+
 
 def _od(rgb: np.ndarray, log_i0: np.ndarray) -> np.ndarray:
     """Optical density ``ln(I0) - ln(max(I, floor))`` of a block (macenko's rule)."""
@@ -202,6 +221,71 @@ def _flags(rgb: np.ndarray, od: np.ndarray, p: dict[str, Any]) -> dict[str, np.n
         out["near"] = (luma < _NEAR_LUMA * p["dark_luminance"]) | (neutral & (mean >= _NEAR_OD))
         # black ink: dense and neutral (its region's median below, :func:`_kept`)
         out["inky"] = neutral & (mean >= _INK_OD)
+    return out
+
+
+def _wash_ink(od: np.ndarray, log_i0: np.ndarray, pen: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Return the pixels of a washed 2-D image that hold ink (or glass) and no tissue.
+
+    ``pen``: its pen flags; ``hi``: its bright end (:func:`_bright_end`).
+    """
+    r, g = od[..., 0], od[..., 1]
+    if int(pen.sum()) >= _WASH_MIN_FLAGS:
+        ratio = g[pen] / np.maximum(r[pen], 1e-6)
+        low = od[pen][ratio <= np.percentile(ratio, _WASH_LOW)]
+        u = np.median(low / np.maximum(np.linalg.norm(low, axis=1, keepdims=True), 1e-9), 0)
+    else:  # the bright end, ink over glass
+        u = np.maximum(log_i0 - np.log(hi), 0.0)
+    size = float(np.linalg.norm(u))
+    if not size > 1e-6:
+        return np.zeros(od.shape[:-1], dtype=bool)
+    u = u / size
+    along = od[..., 0] * u[0] + od[..., 1] * u[1] + od[..., 2] * u[2]
+    a0, a1, a2 = (od[..., i] - along * u[i] for i in range(3))
+    return a0 * a0 + a1 * a1 + a2 * a2 < _WASH_RESIDUAL * _WASH_RESIDUAL
+
+
+def _bright_end(rgb: np.ndarray) -> np.ndarray:
+    """Return each channel's ``_WASH_PERCENTILE``-th percentile of a 2-D image (subsampled)."""
+    sample = rgb[::_WASH_STRIDE, ::_WASH_STRIDE].reshape(-1, 3)
+    return np.maximum(np.percentile(sample, _WASH_PERCENTILE, axis=0), _FLOOR)
+
+
+def _washed(hi: np.ndarray, log_i0: np.ndarray) -> bool:
+    """Whether a bright end (:func:`_bright_end`) is tinted as marker ink: a wash.
+
+    Tinted (``_WASH_TINT``), and its OD ink's colour by the pen flags' ratios (hematoxylin
+    absorbs blue at least 0.28 times as much as red: a pale tile of it is no wash).
+    """
+    if max(np.log(hi[2] / hi[0]), np.log(hi[1] / hi[0])) < _WASH_TINT:
+        return False
+    r, g, b = log_i0 - np.log(hi)
+    return bool(r > 0 and (g < _GREEN_RATIO * r or (b < _BLUE_RATIO * r and g < r)))
+
+
+def _wash(
+    rgb: np.ndarray,
+    od: np.ndarray,
+    log_i0: np.ndarray,
+    flags: dict[str, np.ndarray],
+    whole: bool = False,
+) -> np.ndarray | None:
+    """Ink in the washed 2-D images of a block (their pen flags are cleared), or None.
+
+    In a washed image the region rules are left out (the whole image would be one region
+    of ink) and the ink is told from the tissue under it by :func:`_wash_ink`; with
+    ``whole`` every pixel is ink (each holds the ink's OD: the stain estimators' rule).
+    """
+    out = None
+    for idx in np.ndindex(rgb.shape[:-3]):
+        hi = _bright_end(rgb[idx])
+        if not _washed(hi, log_i0):
+            continue
+        if out is None:
+            out = np.zeros(rgb.shape[:-1], dtype=bool)
+        out[idx] = True if whole else _wash_ink(od[idx], log_i0, flags["pen"][idx], hi)
+        for key in ("pen", "green", "deep", "weak"):
+            flags[key][idx] = False
     return out
 
 
@@ -464,7 +548,13 @@ def _block(
     rgb: np.ndarray, log_i0: np.ndarray, p: dict[str, Any], glass: bool, beta: float
 ) -> np.ndarray:
     od = _od(rgb, log_i0)
-    keep = ~_grow(_flags(rgb, od, p), p["margin"], *p["scale"])
+    flags = _flags(rgb, od, p)
+    ink = None
+    if p["pen"] and rgb.ndim >= 3:
+        ink = _wash(rgb, od, log_i0, flags, p.get("wash") == "whole")
+    keep = ~_grow(flags, p["margin"], *p["scale"])
+    if ink is not None:
+        keep &= ~ink
     if glass:
         r, g, b = od[..., 0], od[..., 1], od[..., 2]
         keep &= r * r + g * g + b * b >= beta * beta

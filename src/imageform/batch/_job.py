@@ -44,7 +44,8 @@ def run_job(
     The workflow writes a temporary file in the output's folder; it is fsync-ed and renamed
     onto ``out_path`` (:func:`imageform._files.atomic_write`: ``os.replace``, atomic on POSIX,
     never onto a FIFO or a device), then the folder is fsync-ed. An
-    exception removes the temporary file and comes back as ``{"ok": False, "error": ...}``.
+    exception removes the temporary file and the output folders this job created (those still
+    empty) and comes back as ``{"ok": False, "error": ...}``.
     ``hold_s`` waits between writing and renaming (a test hook: it widens the window in
     which a killed worker leaves a partial file behind). ``run_id`` names the run in the
     temporary file's name, so that another run into the same folder leaves it alone while
@@ -61,8 +62,13 @@ def run_job(
     tmp = _temp_path(out, run_id)
     t0 = time.perf_counter()
     results: list[Any] = []
+    made: list[Path] = []  # the folders this job creates, removed again if it fails
     try:
         opts = batch_options(command, options)
+        folder = out.parent
+        while not folder.exists() and folder != folder.parent:
+            made.append(folder)
+            folder = folder.parent
         out.parent.mkdir(parents=True, exist_ok=True)
 
         def write(part: Path) -> None:
@@ -75,6 +81,11 @@ def run_job(
         _fsync_folder(out.parent)
     except Exception as exc:
         tmp.unlink(missing_ok=True)
+        for folder in made:  # innermost first; one another job filled in the meantime stays
+            try:
+                folder.rmdir()
+            except OSError:
+                break
         msg = str(exc).splitlines()[0] if str(exc) else ""
         return {"ok": False, "error": f"{type(exc).__name__}: {msg}".rstrip(": ")}
     result = results[0]

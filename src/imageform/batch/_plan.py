@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -240,17 +240,27 @@ def _producer(wf: Workflow, opts: Options) -> dict[str, Any]:
     return {"command": wf.name, "options": json_ready(opts), "option_files": files}
 
 
-def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = None) -> list[Job]:
+def plan_jobs(
+    pattern: str,
+    out_dir: str | Path,
+    *,
+    out_suffix: str | None = None,
+    writes: Sequence[str] | None = None,
+) -> list[Job]:
     """Return the jobs for the files matching ``pattern``, outputs under ``out_dir``.
 
     Parameters
     ----------
     pattern : str
-        A glob; ``**`` matches any number of folders. Hidden files are not matched.
+        A glob; ``**`` matches any number of folders. Hidden files are not matched. An
+        existing folder stands for its files (``folder/*``).
     out_dir : path
         Outputs go to ``out_dir / (input relative to the glob's fixed prefix)``.
     out_suffix : str, optional
         Replace each output's suffix (``".tif"``); by default the input's.
+    writes : sequence of str, optional
+        The suffixes the command writes (``".png"``, ...): without ``out_suffix``, an input
+        of another suffix (a raw file, a WebP) gets the first of them.
 
     Returns
     -------
@@ -285,6 +295,14 @@ def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = Non
             )
         if not out_suffix.startswith("."):
             out_suffix = "." + out_suffix
+    if os.path.isdir(pattern) and not any(c in pattern for c in "*?["):
+        pattern = os.path.join(pattern, "*")  # a folder: its files
+    fallback = None
+    if writes is not None:
+        kinds = [str(w).lower() for w in writes]
+        if not kinds or not all(k.startswith(".") and len(k) > 1 for k in kinds):
+            raise InvalidInputError(f"expected writes as file suffixes, got {describe(writes)}")
+        fallback = kinds[0]
     base = Path(os.path.abspath(glob_base(pattern)))
     inputs = sorted(Path(os.path.abspath(p)) for p in glob_paths(pattern) if os.path.isfile(p))
     if not inputs:
@@ -302,6 +320,8 @@ def plan_jobs(pattern: str, out_dir: str | Path, *, out_suffix: str | None = Non
         real_out = real_out_root / rel
         if out_suffix is not None:
             out, real_out = out.with_suffix(out_suffix), real_out.with_suffix(out_suffix)
+        elif fallback is not None and p.suffix.lower() not in kinds:
+            out, real_out = out.with_suffix(fallback), real_out.with_suffix(fallback)
         if (
             str(out) in {str(i) for i in inputs}
             or matcher.match(str(out))

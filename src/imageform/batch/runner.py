@@ -216,7 +216,9 @@ def run_batch(
         A workflow that runs file by file (``convert``, ``white-balance``, ``demosaic``,
         ``stain-normalize``, ``harmonize`` ...: :func:`batch_workflow`).
     pattern, out_dir, out_suffix :
-        See :func:`plan_jobs`.
+        See :func:`plan_jobs` (``pattern`` may be a folder: its files). Without
+        ``out_suffix``, an input whose suffix the command does not write (a raw file for
+        ``develop``, a WebP) gets the command's first output suffix (``.png``).
     options : Options or mapping, optional
         The command's options (its dataclass, or ``{"to": "linear_srgb"}``: see
         :func:`batch_options`); the defaults are the single command's.
@@ -265,7 +267,7 @@ def run_batch(
         raise InvalidInputError(f"expected on_result as a callable, got {describe(on_result)}")
     wf = batch_workflow(command)
     opts = batch_options(wf, options)
-    jobs = plan_jobs(pattern, out_dir, out_suffix=out_suffix)
+    jobs = plan_jobs(pattern, out_dir, out_suffix=out_suffix, writes=wf.suffixes)
     for suffix in sorted({j.output.suffix.lower() for j in jobs}):
         if suffix not in wf.suffixes:
             raise InvalidInputError(

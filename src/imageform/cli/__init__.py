@@ -85,6 +85,10 @@ def _no_such_option(exc: click.NoSuchOption, ctx: click.Context) -> str:
 
 def _os_error(exc: OSError) -> str:
     name = exc.filename if exc.filename is not None else None
+    if name is not None and len(str(name)) > 100:  # a name too long to read (or to use)
+        from imageform._validate import describe
+
+        name = describe(str(name), 100)
     reason = exc.strerror or _first_line(exc)
     return f"{name}: {reason}" if name else reason
 

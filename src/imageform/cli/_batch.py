@@ -100,7 +100,12 @@ def _batch_command(wf: Workflow) -> click.Command:
             help="Worker processes of a local cluster (default: one per CPU, at most one per "
             "file).",
         ),
-        click.Option(["--suffix"], default=None, help="Output suffix (.png, .tif, .npy)."),
+        click.Option(
+            ["--suffix"],
+            default=None,
+            help="Output suffix (.png, .tif, .npy); default the input's, or .png where the "
+            "command does not write the input's kind.",
+        ),
         click.Option(["--force"], is_flag=True, help="Redo outputs that are up to date."),
         click.Option(["--json", "json_out"], is_flag=True, help="Print the summary as JSON."),
     ]
@@ -145,7 +150,9 @@ def _batch_command(wf: Workflow) -> click.Command:
         wf.name,
         params=params,
         callback=callback,
-        help=f"{wf.summary}\n\nOver every file matching GLOB (quote it), on a dask cluster.",
+        help=f"{wf.summary}\n\nOver every file matching GLOB (quote it; a folder: its files), on "
+        "a dask cluster. An input of a kind the command does not write (a raw file, a WebP) "
+        "gets a .png output unless --suffix says otherwise.",
         short_help=wf.summary,
         no_args_is_help=True,
     )

@@ -65,6 +65,18 @@ PLANE_AREA = (30, 0.02)
 #: plane is taken where at least this share of the rim's valid pixels are inliers (and at
 #: least half of the rim's pixels are valid)
 PLANE_INLIER = (1.0, 0.8)
+#: ``plane_fill``: passes of the plane's refit on the rim's and the region's own disparities
+#: within ``PLANE_INLIER[0]`` px of it (0: the rim's plane as it is)
+PLANE_REFIT = 2
+#: ``plane_fill``: a region keeps its matched disparities where the plane's mean absolute
+#: difference of the left image and the right one warped by it (its mean taken out) exceeds
+#: the matched disparities' by more than this factor (chosen on the tuning sets of
+#: ``benchmarks/check_stereo_planes.py``: 1.25, 1.3, 1.4, 1.6 tried)
+PLANE_PHOTO = 1.4
+#: ``plane_fill``: a region keeps its matched disparities where more than this share of its
+#: pixels would, on the plane, hide a textured pixel matched to the same right pixel (a plane
+#: nearer than what the right view sees there)
+PLANE_HIDE = 0.2
 
 
 def _grey(image: Any, name: str) -> NDArray[np.float32]:
@@ -181,18 +193,27 @@ def stereo_disparity(
        textured rim (the pixels within 3 px outside it), refitted twice on the rim's
        disparities within 1 px of it, where at least 80 % of the rim's valid disparities are
        such inliers and half of the rim is valid (a rim on two surfaces fails; invalid pixels
-       of the region are filled too, never those of the invalid band). In a region without
+       of the region are filled too, never those of the invalid band). The plane is then
+       refitted twice on the rim's and the region's own valid disparities within 1 px of it
+       (matched faint texture pulls it toward a curved surface), and the region keeps its
+       matched disparities where the plane explains its pixels worse:
+       ``E(plane) > 1.4 E(matched)``, ``E(d)`` the mean absolute deviation from its mean of
+       ``L(x, y) - R(x - d, y)`` over the region's valid pixels (the right row interpolated
+       linearly), or where more than 20 % of its pixels on the plane would land on right
+       pixels claimed by textured pixels of a disparity more than 1 px lower (the plane would
+       hide what the right view sees). In a region without
        texture every disparity costs alike and each path carries in the disparity of the
        edge it came from, a step costing ``P1``: the sum takes one of those edges' values
        where a slanted surface's disparity changes (SGM's fronto-parallel bias; the plane
        fits of segments, Hirschmüller 2008 for untextured areas, Klaus et al. ICPR 2006). On
-       ``benchmarks/check_stereo_slant.py``'s board pairs (truth the board's plane) the
-       share more than 1 px off falls from 8.08 % to 4.88 % on webcam-1 (OpenCV
-       ``MODE_HH`` 6.51 %), from 11.66 % to 8.85 % on the XIMEA pairs (OpenCV 10.04 %), from
-       10.82 % to 8.34 % on webcam-2 (OpenCV 8.17 %), Middlebury Adirondack's from 5.80 % to
-       4.94 %; it rises on teddy (5.41 % to 5.78 %) and by 0.08 point on the mean of six
-       Middlebury 2005 / 2006 scenes. The cap of 2 % keeps large flat regions (Venus's
-       background, whose long rim spans several surfaces) as matched.
+       ``benchmarks/check_stereo_planes.py``'s board pairs (truth the board's plane) the
+       share more than 1 px off falls from 8.08 % to 4.87 % on webcam-1 (OpenCV
+       ``MODE_HH`` 6.51 %), from 11.66 % to 8.89 % on the XIMEA pairs (OpenCV 10.04 %), from
+       10.82 % to 8.43 % on webcam-2 (OpenCV 8.17 %), from 2.39 % to 0.99 % on the da Vinci
+       endoscope's (OpenCV 13.64 %); Middlebury Adirondack's from 5.80 % to 4.68 %, teddy
+       5.41 % to 5.44 % (5.78 % with the rim's plane alone, 2026-11-30h), the mean of six
+       Middlebury 2005 / 2006 scenes 4.00 % both (4.08 %). The cap of 2 % keeps large flat
+       regions (Venus's background, whose long rim spans several surfaces) as matched.
 
     Parameters
     ----------
@@ -305,8 +326,9 @@ def stereo_disparity(
     -----
     The work is ``O(H W D)`` with ``D = num_disparities`` (about 3 ns a pixel and disparity
     on one core with numba, the block sums of ``cost_window`` some 0.3 ns more, sliding;
-    ``plane_fill`` some 80 ns a pixel, whatever ``D``, in NumPy and SciPy;
-    ``benchmarks/check_stereo_slant.py`` times it against OpenCV's ``MODE_HH``); memory 3
+    ``plane_fill`` some 80 ns a pixel, whatever ``D``, in NumPy and SciPy, its refit and
+    tests 1 % to 8 % more of the whole;
+    ``benchmarks/check_stereo_planes.py`` times it against OpenCV's ``MODE_HH``); memory 3
     bytes a pixel and disparity. The numba kernels
     (:mod:`imageform._kernels.sgm`) and their NumPy twins give the same numbers.
 
@@ -388,7 +410,7 @@ def stereo_disparity(
         bool(median_filter), thr, step, cw,
     )  # fmt: skip
     if plane_fill:
-        d = _plane_fill(d, gl, min_d, n_d)
+        d = _plane_fill(d, gl, min_d, n_d, gr)
     return np.ascontiguousarray(d.T) if vertical else d
 
 
@@ -440,7 +462,11 @@ def _match(
 
 
 def _plane_fill(
-    disp: NDArray[np.float32], grey: NDArray[np.float32], min_d: int, n_d: int
+    disp: NDArray[np.float32],
+    grey: NDArray[np.float32],
+    min_d: int,
+    n_d: int,
+    right: NDArray[np.float32] | None = None,
 ) -> NDArray[np.float32]:
     """Give the flat regions of ``grey`` the plane of the disparities on their textured rim.
 
@@ -449,8 +475,11 @@ def _plane_fill(
     ``PLANE_RIM`` px, each to its nearest region); per region the least-squares plane
     ``d = a x + b y + c`` of its rim's valid disparities, refitted twice on the rim pixels
     within ``PLANE_INLIER[0]`` px of it; taken where those are at least ``PLANE_INLIER[1]`` of
-    the rim's valid pixels and half of the rim is valid, for every pixel of the region inside
-    the valid band (invalid ones too).
+    the rim's valid pixels and half of the rim is valid, then refitted ``PLANE_REFIT`` times on
+    the rim's and the region's own valid disparities within ``PLANE_INLIER[0]`` px of it, and
+    given to every pixel of the region inside the valid band (invalid ones too) unless the
+    plane explains the region's pixels worse than its matched disparities (``PLANE_PHOTO``,
+    with the ``right`` image; None skips that test) or hides textured pixels (``PLANE_HIDE``).
     """
     from scipy import ndimage
 
@@ -474,13 +503,74 @@ def _plane_fill(
     src = rim & valid
     seg = near[src]
     ys, xs = np.nonzero(src)
-    x, y, z = xs.astype(np.float64), ys.astype(np.float64), disp[src].astype(np.float64)
     m = n + 1
-    weight = np.ones_like(z)
-    coef = np.zeros((m, 3))
+    coef, fitted, weight = _fit_planes(seg, xs, ys, disp[src], m, None, 3)
+    inliers = np.bincount(seg, weights=weight, minlength=m)
+    used = np.bincount(seg, minlength=m)
+    rim_px = np.bincount(near[rim], minlength=m)
+    take = fitted & (inliers >= PLANE_INLIER[1] * used) & (2 * used >= rim_px)
+    take[0] = False
+    if not take.any():
+        return disp
+    # the refit on the rim and the region's own disparities near the plane: a curved surface's
+    # faint texture, matched, pulls the plane toward it; a flat square's path-carried values
+    # lie about the plane's middle and move it little
+    inner = (lab > 0) & valid & take[lab]
+    yi, xi = np.nonzero(inner)
+    both = (
+        np.concatenate([seg, lab[inner]]),
+        np.concatenate([xs, xi]),
+        np.concatenate([ys, yi]),
+        np.concatenate([disp[src], disp[inner]]),
+    )
+    if PLANE_REFIT > 0:
+        refit, ok, _ = _fit_planes(*both, m, coef, PLANE_REFIT)
+        ok &= take
+        coef[ok] = refit[ok]
+    k = lab[inner]
+    plane = coef[k, 0] * xi + coef[k, 1] * yi + coef[k, 2]
+    if right is not None:
+        take &= ~(_photo_ratio(grey, right, yi, xi, disp[inner], plane, k, m) > PLANE_PHOTO)
+    take &= ~(_hidden_share(disp, lab, take, coef, m) > PLANE_HIDE)
+    x0 = min(max(min_d + n_d - 1, 0), w)
+    x1 = max(min(w, w + min_d), x0)
+    sel = take[lab]
+    sel[:, :x0] = False
+    sel[:, x1:] = False
+    yy, xx = np.nonzero(sel)
+    k = lab[yy, xx]
+    out = disp.copy()
+    out[yy, xx] = (coef[k, 0] * xx + coef[k, 1] * yy + coef[k, 2]).astype(np.float32)
+    return out
+
+
+def _fit_planes(
+    seg: NDArray[np.intp],
+    xs: NDArray[np.intp],
+    ys: NDArray[np.intp],
+    disp: NDArray[np.float32],
+    m: int,
+    coef: NDArray[np.float64] | None,
+    passes: int,
+) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.float64]]:
+    """Least-squares planes ``d = a x + b y + c`` of the points of each segment ``0 .. m - 1``.
+
+    The first pass on every point (``coef`` None) or on those within ``PLANE_INLIER[0]`` px of
+    the planes ``coef``, each next one on the points within that of the last fit. Returns the
+    planes (zero where none fits), where one fits (10 points, not all on a line), and the
+    weights (1 inlier, 0 not) against the last fit.
+    """
+    x, y, z = xs.astype(np.float64), ys.astype(np.float64), disp.astype(np.float64)
+
+    def inliers(c: NDArray[np.float64]) -> NDArray[np.float64]:
+        r = z - (c[seg, 0] * x + c[seg, 1] * y + c[seg, 2])
+        return (np.abs(r) <= PLANE_INLIER[0]).astype(np.float64)
+
+    weight = np.ones_like(z) if coef is None else inliers(coef)
+    out = np.zeros((m, 3))
     fitted = np.zeros(m, dtype=bool)
     terms = np.stack([x * x, x * y, y * y, x, y, np.ones_like(x), x * z, y * z, z])
-    for _ in range(3):  # the fit, then twice on its inliers
+    for _ in range(passes):
         t = [np.bincount(seg, weights=weight * v, minlength=m) for v in terms]
         sxx, sxy, syy, sx, sy, s1 = t[:6]
         A = np.stack(
@@ -494,26 +584,76 @@ def _plane_fill(
         b = np.stack(t[6:], -1)
         fitted = s1 >= 10
         fitted &= np.abs(np.linalg.det(A)) > 1e-9 * np.maximum(s1, 1.0) ** 3
-        coef[:] = 0.0
+        out[:] = 0.0
         if fitted.any():
-            coef[fitted] = np.linalg.solve(A[fitted], b[fitted][..., None])[..., 0]
-        r = z - (coef[seg, 0] * x + coef[seg, 1] * y + coef[seg, 2])
-        weight = (np.abs(r) <= PLANE_INLIER[0]).astype(np.float64)
-    inliers = np.bincount(seg, weights=weight, minlength=m)
-    used = np.bincount(seg, minlength=m)
-    rim_px = np.bincount(near[rim], minlength=m)
-    take = fitted & (inliers >= PLANE_INLIER[1] * used) & (2 * used >= rim_px)
-    take[0] = False
-    x0 = min(max(min_d + n_d - 1, 0), w)
-    x1 = max(min(w, w + min_d), x0)
-    sel = take[lab]
-    sel[:, :x0] = False
-    sel[:, x1:] = False
-    yy, xx = np.nonzero(sel)
-    k = lab[yy, xx]
-    out = disp.copy()
-    out[yy, xx] = (coef[k, 0] * xx + coef[k, 1] * yy + coef[k, 2]).astype(np.float32)
-    return out
+            out[fitted] = np.linalg.solve(A[fitted], b[fitted][..., None])[..., 0]
+        weight = inliers(out)
+    return out, fitted, weight
+
+
+def _photo_ratio(
+    grey: NDArray[np.float32],
+    right: NDArray[np.float32],
+    ys: NDArray[np.intp],
+    xs: NDArray[np.intp],
+    matched: NDArray[np.float32],
+    plane: NDArray[np.float64],
+    seg: NDArray[np.intp],
+    m: int,
+) -> NDArray[np.float64]:
+    """Per segment, how much worse the plane explains the left pixels than the matched values.
+
+    ``E(d) = mean |D - mean D|`` over the segment's pixels, ``D = L(x, y) - R(x - d, y)``
+    (the right row interpolated linearly, the border replicated; the mean taken out so that an
+    offset between the cameras counts for nothing); returns ``E(plane) / E(matched)``.
+    """
+    w = grey.shape[1]
+    cnt = np.maximum(np.bincount(seg, minlength=m), 1)
+    left = grey[ys, xs].astype(np.float64)
+
+    def spread(d: NDArray[np.floating[Any]]) -> NDArray[np.float64]:
+        xr = np.clip(xs - d.astype(np.float64), 0.0, w - 1.0)
+        i = np.floor(xr).astype(np.intp)
+        f = xr - i
+        j = np.minimum(i + 1, w - 1)
+        diff = left - (right[ys, i] * (1.0 - f) + right[ys, j] * f)
+        mu = np.bincount(seg, weights=diff, minlength=m) / cnt
+        return np.bincount(seg, weights=np.abs(diff - mu[seg]), minlength=m) / cnt
+
+    return spread(plane) / np.maximum(spread(matched), 1e-6)
+
+
+def _hidden_share(
+    disp: NDArray[np.float32],
+    lab: NDArray[np.intp],
+    take: NDArray[np.bool_],
+    coef: NDArray[np.float64],
+    m: int,
+) -> NDArray[np.float64]:
+    """Per segment, the share of its pixels whose plane would hide a matched textured pixel.
+
+    The valid pixels outside the segments claim the right pixels ``floor(x - d)`` and
+    ``ceil(x - d)``; a segment's pixel on its plane ``p`` landing on a right pixel claimed by a
+    disparity below ``p - 1`` would stand in front of that pixel, which the right view sees.
+    """
+    h, w = disp.shape
+    src = (lab == 0) & np.isfinite(disp)
+    ys, xs = np.nonzero(src)
+    d = disp[src].astype(np.float64)
+    low = np.full(h * w, np.inf)
+    for xr in (np.floor(xs - d), np.ceil(xs - d)):
+        inside = (xr >= 0) & (xr < w)
+        np.minimum.at(low, ys[inside] * w + xr[inside].astype(np.intp), d[inside])
+    sel = (lab > 0) & take[lab]
+    ys, xs = np.nonzero(sel)
+    k = lab[sel]
+    p = coef[k, 0] * xs + coef[k, 1] * ys + coef[k, 2]
+    xr = np.round(xs - p)
+    inside = (xr >= 0) & (xr < w)
+    hides = np.zeros(k.size)
+    at = ys[inside] * w + xr[inside].astype(np.intp)
+    hides[inside] = p[inside] > low[at] + PLANE_INLIER[0]
+    return np.bincount(k, weights=hides, minlength=m) / np.maximum(np.bincount(k, minlength=m), 1)
 
 
 def _divisor(nbits: int, window: int) -> int:

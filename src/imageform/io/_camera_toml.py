@@ -24,22 +24,36 @@ def load_toml(p: Path, what: str, form: str) -> dict[str, Any]:
     """Return the TOML file ``p`` (a camera file, a marker map) parsed, or refuse it in one line.
 
     ``what`` names the kind of file in the messages, ``form`` says what it should be (an image
-    given for it is "not UTF-8 text").
+    given for it is "not UTF-8 text"). A long name is shortened in the messages; a name the
+    file system refuses, a FIFO or device, and an integer beyond Python's 4300 digits are
+    refused in one line too.
     """
-    if not p.is_file():
-        raise InvalidInputError(f"{what} {p} does not exist")
+    from imageform._files import not_a_regular_file
+    from imageform._validate import describe
+
+    name = str(p) if len(str(p)) <= 100 else describe(str(p), 100)
+    try:
+        found = p.is_file()
+    except OSError as exc:  # a name too long for the file system
+        raise InvalidInputError(f"cannot use {name} as a {what}: {exc.strerror}") from None
+    if not found:
+        kind = not_a_regular_file(p)
+        if kind is not None:
+            raise InvalidInputError(f"{what} {name} {kind}")
+        raise InvalidInputError(f"{what} {name} does not exist")
     try:
         text = p.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:  # an image or other binary file given for it
         raise InvalidInputError(
-            f"{p} is not a {what}: not UTF-8 text (byte {exc.start}); a {what} is {form}"
+            f"{name} is not a {what}: not UTF-8 text (byte {exc.start}); a {what} is {form}"
         ) from None
     except OSError as exc:
-        raise InvalidInputError(f"cannot read {what} {p}: {exc}") from None
+        raise InvalidInputError(f"cannot read {what} {name}: {exc.strerror or exc}") from None
     try:
         return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InvalidInputError(f"{p}: not valid TOML: {exc}") from None
+    except (tomllib.TOMLDecodeError, ValueError) as exc:  # ValueError: a 5000-digit integer
+        reason = " ".join(str(exc).split())
+        raise InvalidInputError(f"{name}: not valid TOML: {reason}") from None
 
 
 class Reader:

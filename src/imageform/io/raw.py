@@ -82,6 +82,8 @@ _CAMERA_CALIBRATION_2 = 50724
 _ANALOG_BALANCE = 50727
 _AS_SHOT_NEUTRAL = 50728
 _AS_SHOT_WHITE_XY = 50729
+_BASELINE_EXPOSURE = 50730
+_OPCODE_LIST_3 = 51022
 _CALIBRATION_ILLUMINANT_1 = 50778
 _CALIBRATION_ILLUMINANT_2 = 50779
 _PHOTOMETRIC_CFA = 32803
@@ -111,6 +113,24 @@ def _rationals(values: np.ndarray, what: str, *, signed: bool) -> list[int]:
     return out
 
 
+def _vignette_opcode_list(params: ArrayLike) -> bytes:
+    """Return an OpcodeList holding one FixVignetteRadial opcode (big-endian, DNG 1.3.0.0)."""
+    import struct
+
+    try:
+        v = np.asarray(params, dtype=np.float64)
+    except (TypeError, ValueError):
+        v = np.zeros(0)
+    if v.shape != (7,) or not np.all(np.isfinite(v)) or not np.all((v[5:] >= 0) & (v[5:] <= 1)):
+        raise InvalidInputError(
+            "expected fix_vignette_radial as 7 finite numbers k0..k4, cx, cy (cx, cy in "
+            f"[0, 1]), got {describe(params)}"
+        )
+    body = struct.pack(">7d", *v.tolist())
+    # count, then the opcode: id 3, its DNG version 1.3.0.0, flags 0, the parameters' size
+    return struct.pack(">I4I", 1, 3, 0x01030000, 0, len(body)) + body
+
+
 def _cfa_indices(pattern: str) -> tuple[int, int, int, int]:
     return tuple("RGB".index(c) for c in pattern)  # type: ignore[return-value]
 
@@ -126,6 +146,8 @@ def write_dng(
     as_shot_neutral: ArrayLike = (1.0, 1.0, 1.0),
     calibration_illuminant: str = "D65",
     camera_model: str = "imageform simulated camera",
+    baseline_exposure_ev: float = 0.0,
+    fix_vignette_radial: ArrayLike | None = None,
 ) -> Path:
     r"""Write a Bayer mosaic as a DNG file that raw developers open.
 
@@ -141,6 +163,14 @@ def write_dng(
       1e-6), :math:`\mathbf c = C\,\mathbf{XYZ}`;
     - AsShotNeutral: the camera RGB of a neutral in the scene (white balance gains are its
       reciprocals);
+    - BaselineExposure (when not 0): how many stops a developer should brighten the
+      linear rendering, :math:`2^{EV}` (Adobe's readers apply it; LibRaw does not;
+      ``develop(baseline_exposure=True)`` does);
+    - OpcodeList3 with one FixVignetteRadial opcode (DNG 1.3, opcode 3), when given: the
+      lens-shading correction a developer applies to the demosaiced camera RGB,
+      :math:`g = 1 + \sum_{i=0}^{4} k_i r^{2(i+1)}` with :math:`r` the distance from the
+      optical centre over the distance to the farthest corner (:func:`develop` and Adobe's
+      readers apply it; LibRaw does not);
     - UniqueCameraModel.
 
     Parameters
@@ -162,6 +192,11 @@ def write_dng(
         The illuminant of ``color_matrix``: a name of :data:`CALIBRATION_ILLUMINANTS`.
     camera_model : str
         UniqueCameraModel.
+    baseline_exposure_ev : float
+        BaselineExposure in stops (EV), a finite number in [-16, 16]; 0 writes no tag.
+    fix_vignette_radial : array_like (7,), optional
+        The FixVignetteRadial opcode's parameters as the DNG stores them: ``k0..k4`` and the
+        optical centre ``(cx, cy)`` in fractions of the width and height (each in [0, 1]).
 
     Returns
     -------
@@ -221,6 +256,15 @@ def write_dng(
         raise InvalidInputError(
             f"expected camera_model as a non-empty ASCII string, got {describe(camera_model)}"
         )
+    try:
+        ev = float(baseline_exposure_ev)
+    except (TypeError, ValueError):
+        ev = math.nan
+    if isinstance(baseline_exposure_ev, bool) or not (math.isfinite(ev) and abs(ev) <= 16):
+        raise InvalidInputError(
+            "expected baseline_exposure_ev as a number of stops in [-16, 16], got "
+            f"{describe(baseline_exposure_ev)}"
+        )
     tags = [
         (_DNG_VERSION, _BYTE, 4, (1, 4, 0, 0), True),
         (_DNG_BACKWARD_VERSION, _BYTE, 4, (1, 1, 0, 0), True),
@@ -242,6 +286,12 @@ def write_dng(
         ),
         (_CALIBRATION_ILLUMINANT_1, _SHORT, 1, CALIBRATION_ILLUMINANTS[ill], True),
     ]
+    if ev != 0.0:
+        rational = _rationals(np.array([ev]), "baseline_exposure_ev", signed=True)
+        tags.append((_BASELINE_EXPOSURE, _SRATIONAL, 1, rational, True))
+    if fix_vignette_radial is not None:
+        opcodes = _vignette_opcode_list(fix_vignette_radial)
+        tags.append((_OPCODE_LIST_3, 7, len(opcodes), opcodes, True))
     atomic_write(
         out,
         lambda tmp: tifffile.imwrite(
@@ -288,7 +338,8 @@ class RawImage:
         The illuminant of ``xyz_to_camera`` (``"D65"`` where the file does not say).
     metadata : dict
         What else is known: ``raw_type``, ``color_desc``, ``daylight_white_balance``,
-        ``camera_model`` (DNG UniqueCameraModel), ``path``.
+        ``camera_model`` (DNG UniqueCameraModel), ``path``; ``baseline_exposure_ev`` (a
+        DNG's BaselineExposure, stops) where the file has one.
     orientation : int
         How the image is turned for display, as LibRaw's ``sizes.flip`` (from the EXIF/TIFF
         Orientation tag): 0 none, 3 half a turn, 5 a quarter turn anticlockwise, 6 a
@@ -354,7 +405,8 @@ def _colour_tags(tags: Any) -> dict[str, Any]:
     """Return the colour tags and UniqueCameraModel of one IFD's tifffile tags.
 
     ColorMatrix1/2, CameraCalibration1/2, CalibrationIlluminant1/2, AnalogBalance and
-    AsShotWhiteXY, by short names (``cm1``, ``cc1``, ``ill1``, ``ab``, ``white_xy``, ...).
+    AsShotWhiteXY and BaselineExposure, by short names (``cm1``, ``cc1``, ``ill1``, ``ab``,
+    ``white_xy``, ``baseline_ev``, ...).
     """
     found: dict[str, Any] = {}
     for code, name in (
@@ -366,12 +418,20 @@ def _colour_tags(tags: Any) -> dict[str, Any]:
         (_CALIBRATION_ILLUMINANT_2, "ill2"),
         (_ANALOG_BALANCE, "ab"),
         (_AS_SHOT_WHITE_XY, "white_xy"),
+        (_BASELINE_EXPOSURE, "baseline_ev"),
         (_UNIQUE_CAMERA_MODEL, "model"),
     ):
         if code in tags:
             tag = tags[code]
             found[name] = tag.value if name in ("model", "ill1", "ill2") else _tag_reals(tag)
     return found
+
+
+def _baseline_ev(tags: dict[str, Any], meta: dict[str, Any]) -> None:
+    """Put a DNG's BaselineExposure (stops) in ``meta["baseline_exposure_ev"]`` when finite."""
+    ev = np.ravel(np.asarray(tags.get("baseline_ev", ()), np.float64))
+    if ev.size and np.isfinite(ev[0]):
+        meta["baseline_exposure_ev"] = float(ev[0])
 
 
 def _tag_reals(tag: Any) -> np.ndarray:
@@ -764,6 +824,7 @@ def _read_raw(
         names = {v: k for k, v in CALIBRATION_ILLUMINANTS.items()}
         if "model" in tags:
             meta["camera_model"] = str(tags["model"]).strip("\x00")
+        _baseline_ev(tags, meta)
         dng_matrix, code = _dng_colour(tags)
         if dng_matrix is not None:
             xyz_to_camera = dng_matrix
@@ -1079,6 +1140,7 @@ def _read_dng(p: Path, limit: int) -> RawImage | None:
         "camera_model": str(model).strip("\x00") if model is not None else None,
         "reader": "tifffile",
     }
+    _baseline_ev(colour, meta)
     gains = None
     rgb_cam = np.zeros((3, 3))
     illum: str | None = None
@@ -1148,7 +1210,8 @@ class Development:
     notes : tuple of str
         What the development had to assume (no colour matrix in the file, say).
     brightness : float
-        The factor on the linear output (``develop(auto_bright=True)``; 1 otherwise).
+        The factor on the linear output (``develop(auto_bright=True)`` or
+        ``baseline_exposure=True``; 1 otherwise).
     """
 
     def __init__(
@@ -1454,6 +1517,7 @@ def develop(
     device: str = "cpu",
     transfer: str | None = None,
     auto_bright: bool = False,
+    baseline_exposure: bool = False,
 ) -> Development:
     r"""Develop a raw image with imageform's own pipeline, keeping every stage.
 
@@ -1515,6 +1579,11 @@ def develop(
         scaled so that 1 % of the pixels of its brightest channel reach white
         (:func:`_auto_bright`, :attr:`Development.brightness`). Off by default: the
         development's white is the sensor's.
+    baseline_exposure : bool
+        Brighten by the DNG's BaselineExposure, :math:`2^{EV}` on the linear output, as
+        Adobe's DNG SDK does (DNG specification 1.4.0.0, chapter 4: the camera's
+        recommended exposure offset; ``metadata["baseline_exposure_ev"]``, 1 where the
+        file has none, with a note). LibRaw ignores the tag. Not with ``auto_bright``.
     device : {"cpu", "cuda"}
         Where steps 1-6 of a Bayer mosaic run. ``"cuda"``: bilinear and Malvar development
         as one CUDA kernel (:func:`imageform._cuda.demosaic.develop_bayer`: the mosaic copied
@@ -1548,6 +1617,10 @@ def develop(
     if not isinstance(raw, RawImage):
         raise InvalidInputError(
             f"expected raw as a RawImage (read_raw) or a path, got {describe(raw)}"
+        )
+    if auto_bright and baseline_exposure:
+        raise InvalidInputError(
+            "auto_bright and baseline_exposure both set the brightness: give one of them"
         )
     where_to = str(device).lower()
     if where_to not in ("cpu", "cuda"):
@@ -1691,6 +1764,13 @@ def develop(
     if auto_bright:
         dev.brightness = _auto_bright(dev._sensor_camera_rgb(), m)
         dev._render = (m * np.float32(dev.brightness)).astype(np.float32)
+    elif baseline_exposure:
+        ev = raw.metadata.get("baseline_exposure_ev")
+        if ev is None:
+            dev.notes = (*dev.notes, "the file has no BaselineExposure: not brightened")
+        else:
+            dev.brightness = float(2.0 ** float(ev))
+            dev._render = (m * np.float32(dev.brightness)).astype(np.float32)
     return dev
 
 

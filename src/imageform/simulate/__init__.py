@@ -7,7 +7,12 @@ composed by :func:`simulate`. The world is z up (:data:`WORLD_UP`).
 
 from imageform.simulate.colorfit import apply_color_correction, fit_color_correction
 from imageform.simulate.config import WORLD_UP, CameraConfig, SceneConfig
-from imageform.simulate.dng import simulated_color_matrix, write_simulated_dng
+from imageform.simulate.dng import (
+    simulated_baseline_exposure,
+    simulated_color_matrix,
+    simulated_vignette_opcode,
+    write_simulated_dng,
+)
 from imageform.simulate.lab import LAB_FORMAT, LabSet, render_lab_set
 from imageform.simulate.measured import apply_camera_file
 from imageform.simulate.measured_sensor import MeasuredCamera
@@ -66,6 +71,8 @@ __all__ = [
     "render_lab_set",
     "render_scene",
     "simulate",
+    "simulated_baseline_exposure",
     "simulated_color_matrix",
+    "simulated_vignette_opcode",
     "write_simulated_dng",
 ]

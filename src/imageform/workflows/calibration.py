@@ -353,6 +353,7 @@ class CalibrateOptions(_BoardChecks, ImageIn):
     """Options of ``imageform calibrate``."""
 
     board: str = option(
+        "auto",
         help="Checkerboard COLSxROWS of inner corners (9x6), or say which with 9x6corners or "
         "10x7squares; auto: a checkerboard of the size most views show; a ChArUco board "
         "charuco:COLSxROWS of squares (charuco:7x5, or charuco:6x4corners; with --marker). "

@@ -49,6 +49,11 @@ class DevelopOptions(ImageOut, Options):
         False,
         help="Brighten as LibRaw does by default: 1 % of the brightest channel's pixels at white.",
     )
+    baseline_exposure: bool = option(
+        False,
+        help="Brighten by the DNG's BaselineExposure (2^EV), as Adobe's readers do; LibRaw "
+        "ignores it. Not with --auto-bright.",
+    )
     opcodes: bool = option(
         True,
         help="Apply a DNG's opcodes as Adobe's DNG SDK does: GainMaps (the lens-shading "
@@ -62,6 +67,16 @@ class DevelopOptions(ImageOut, Options):
         "one GPU kernel (numba's CUDA target; refused in one line when no GPU is usable).",
         choices=get_args(Device),
     )
+
+    def check(self) -> None:
+        """Refuse ``--auto-bright`` with ``--baseline-exposure`` (both set the brightness)."""
+        super().check()
+        if self.auto_bright and self.baseline_exposure:
+            from imageform.errors import InvalidInputError
+
+            raise InvalidInputError(
+                "--auto-bright and --baseline-exposure both set the brightness: give one of them"
+            )
 
 
 def raw_layout(img: Any) -> str:
@@ -171,6 +186,7 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
         device=opts.device,
         transfer=opts.transfer,
         auto_bright=opts.auto_bright,
+        baseline_exposure=opts.baseline_exposure,
     )
     for note in dev.notes:
         run.note(note)

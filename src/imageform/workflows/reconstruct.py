@@ -80,8 +80,9 @@ class ReconstructOptions(Options):
         "--camera file's (no distortion, or k1 alone) or 0 with --focal; without a camera "
         "file or --focal it is always refined. Where it runs off or its barrel term is "
         "strong (a fisheye), the equidistant fisheye (Kannala-Brandt, f and one term k1) is "
-        "tried and kept when it registers as many frames at most 5 % above the median "
-        "reprojection error. The camera found is written to camera.toml.",
+        "tried and kept when it registers as many frames and the tracks of both models "
+        "cost it no more (errors capped at 2 px, GRIC's penalty per parameter). The camera "
+        "found is written to camera.toml.",
     )
     max_features: int = option(
         4000, help="SIFT keypoints per frame (the strongest).", minimum=8, maximum=1_000_000

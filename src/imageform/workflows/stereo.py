@@ -459,9 +459,10 @@ class DepthOptions(ImageIn):
     plane_fill: bool = option(
         True,
         help="Give each flat region of the left view (a board's squares, a wall) the plane of "
-        "the disparities on its textured rim, where one plane fits 80 % of them: slanted "
-        "surfaces without texture follow their slant; --no-plane-fill keeps the matched "
-        "values (before 2026-11-30h).",
+        "the disparities on its textured rim, where one plane fits 80 % of them and the "
+        "images fit the plane about as well as the matched values: slanted surfaces without "
+        "texture follow their slant; --no-plane-fill keeps the matched values (before "
+        "2026-11-30h).",
     )
 
 
