@@ -355,12 +355,15 @@ def _reference(path: Path) -> np.ndarray | None:
     """The upright pixels by another decoder, chosen by the file's bytes (not its suffix).
 
     PNG: OpenCV (libpng, every bit depth) turned by the eXIf orientation; TIFF: tifffile and
-    the TIFF 6.0 rules; .npy: NumPy; BMP, GIF, WebP: OpenCV; anything else: Pillow with
-    ``exif_transpose`` (a CMYK JPEG with a CMYK ICC profile converted by ImageCms to sRGB).
+    the TIFF 6.0 rules; .npy: NumPy; BMP, GIF, WebP: OpenCV; PFM and Radiance HDR: OpenCV
+    (:func:`_float_reference`); anything else: Pillow with ``exif_transpose`` (a CMYK JPEG
+    with a CMYK ICC profile converted by ImageCms to sRGB; an ICO's largest entry).
     """
-    head = path.read_bytes()[:8]
+    head = path.read_bytes()[:16]
     if head.startswith(b"\x93NUMPY"):
         return np.load(path)
+    if head[:2] in (b"PF", b"Pf") or head.startswith((b"#?RADIANCE", b"#?RGBE")):
+        return _float_reference(path)
     if head[:4] in (b"II*\0", b"MM\0*", b"II+\0", b"MM\0+"):
         return _tiff_reference(path)
     if head.startswith(b"\x89PNG"):
@@ -385,6 +388,32 @@ def _reference(path: Path) -> np.ndarray | None:
         elif up.mode in ("CMYK", "YCbCr", "1"):
             up = up.convert("RGB" if up.mode != "1" else "L")
         return np.asarray(up)
+
+
+def _float_reference(path: Path) -> np.ndarray:
+    """A PFM or Radiance HDR by OpenCV, put in the values each format's definition gives.
+
+    PFM: OpenCV divides the stored numbers by the scale's magnitude; the format leaves that
+    factor to the application and Pillow does not apply it, so it is multiplied back (the
+    samples as stored). HDR: OpenCV's ``rgbe.c`` decodes ``m * 2**(E - 136)``; Radiance's
+    ``colr_color`` adds half a mantissa step, ``0.5 * 2**(E - 136)``, ``E`` recovered from the
+    pixel's largest value (its mantissa is 128 to 255).
+    """
+    import re
+
+    import cv2
+
+    a = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if a is None:
+        raise ValueError("OpenCV cannot decode it")
+    a = a[..., ::-1] if a.ndim == 3 else a[..., None]
+    data = path.read_bytes()[:256]
+    m = re.match(rb"\AP[Ff]\s+\d+\s+\d+\s+([-+0-9.eE]+)\s", data)
+    if m is not None:
+        return np.ascontiguousarray(a * np.float32(abs(float(m.group(1)))))
+    top = a.max(axis=-1, keepdims=True).astype(np.float64)
+    step = np.where(top > 0, np.exp2(np.floor(np.log2(np.where(top > 0, top, 1))) - 7), 0.0)
+    return np.ascontiguousarray(a + 0.5 * step, dtype=np.float32)
 
 
 def _opencv_reference(path: Path) -> np.ndarray:
@@ -455,6 +484,16 @@ def _tiff_reference(path: Path) -> np.ndarray:
         elif a.dtype == bool:
             a = a.astype(np.uint8) * 255
         bits = 8 if a.dtype == np.uint8 else page.bitspersample
+        icc = bytes(page.tags[34675].value) if 34675 in page.tags else b""
+        if page.photometric == 5 and icc[16:20] == b"CMYK" and a.dtype == np.uint8:
+            from PIL import Image, ImageCms  # LittleCMS through Pillow: the profile to sRGB
+
+            src = ImageCms.ImageCmsProfile(io.BytesIO(icc))
+            im = Image.fromarray(np.ascontiguousarray(a[..., :4]), "CMYK")
+            rgb = ImageCms.profileToProfile(im, src, ImageCms.createProfile("sRGB"),
+                                            outputMode="RGB")  # fmt: skip
+            assert rgb is not None
+            a = np.concatenate([np.asarray(rgb), a[..., 4:]], axis=-1)
         if page.photometric == 0:  # 10/12/14-bit samples stay as stored (DN)
             a = ((1 << bits) - 1 if bits < 8 * a.dtype.itemsize else np.iinfo(a.dtype).max) - a
     return _turn(a, orientation)
@@ -499,6 +538,13 @@ def _check_read(path: Path) -> tuple[str, str]:
             return "wrong", "alpha differs from the reference decoder"
         delta = delta[ref[..., -1] > 0]  # a fully transparent pixel's colour is undefined
     diff = float(delta.max(initial=0.0))
+    if got.dtype.kind == "f":  # float references (PFM, HDR) rescaled by the checker: 1 ulp
+        size = np.abs(ref[..., :colour].astype(np.float64)).max(axis=-1)
+        size = size[ref[..., -1] > 0] if ref.shape[2] in (2, 4) else size
+        worse = delta > 2 * np.finfo(np.float32).eps * size
+        if np.any(worse):
+            return "wrong", f"values differ from the reference decoder by up to {diff:g}"
+        return "fine", f"{got.shape} {got.dtype}"
     if diff > (2 if got.dtype == np.uint8 else 0):
         return "wrong", f"values differ from the reference decoder by up to {diff:g}"
     return "fine", f"{got.shape} {got.dtype}"

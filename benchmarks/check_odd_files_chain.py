@@ -17,6 +17,9 @@ the table prints and checks) goes through
 - ``white-balance`` (PNG), ``stain-normalize --method macenko``, ``sfr``, ``chart``,
   ``develop``: a result or one line;
 - ``chunked convert --to lab``: the same Lab as ``convert`` (to 1e-3);
+- ``frame 0``: ``convert --frame 0 --to lab`` (TIFF): a file of several images (a TIFF
+  stack, an animated GIF) converts its first; a file of one image the same Lab as
+  ``convert``'s (to 1e-6);
 - ``batch convert 'FOLDER/*' --to lab``, once for the folder (its own temporary folder must
   stay empty): each file's Lab checked as ``convert``'s, and the same outcome;
 - ``bad options``: ``convert --to nonsense`` and ``white-balance --method nonsense``: exit 2,
@@ -24,7 +27,10 @@ the table prints and checks) goes through
 
 ``--compare BEFORE.md AFTER.md`` prints one table of the two runs' outcomes (two sweeps'
 printed tables, e.g. of the main branch and of a change, on the same files): per file, the
-verdicts before and after, and every run whose verdict changed.
+verdicts before and after, and every run whose verdict changed. ``--report INTRO.md
+TUNE_BEFORE TUNE_AFTER HELD_BEFORE HELD_AFTER HELD_SOURCES.tsv`` prints a results page: the
+introduction, the held-out files frozen by SHA-256 (checked again), each half's verdict
+counts before and after, and its ``--compare`` tables.
 
 Each gets one verdict (as in ``check_odd_files``): **fine**, **error** (exit 1 or 2, one
 line, no output left behind), **noisy**, **crash**, **wrong** (wrong values or size, an output
@@ -73,6 +79,7 @@ CLASSES = (
     "develop",
     "batch convert",
     "chunked convert",
+    "frame 0",
     "bad options",
 )
 
@@ -246,6 +253,14 @@ def sweep_file(path: Path) -> list[dict[str, Any]]:
         elif v == "fine" and not lab.is_file():
             v, n = "wrong", "chunked convert wrote what convert refused"
         add("chunked convert", v, n, sec, chunk)
+
+        first = out / "frame0.tif"
+        v, n, sec, _ = _step(["convert", s, "--frame", "0", "--to", "lab", "-o", str(first)])
+        if v == "fine" and lab.is_file():
+            a, b = _read_tif(first), _read_tif(lab)
+            if a.shape != b.shape or not np.allclose(a, b, atol=1e-6, equal_nan=True):
+                v, n = "wrong", "--frame 0 of a file of one image differs from convert's"
+        add("frame 0", v, n, sec, first)
 
         bad = out / "bad.png"
         v1, n1, sec1, _ = _step(["convert", s, "--to", "nonsense", "-o", str(bad)])
@@ -452,11 +467,42 @@ def compare(before: Path, after: Path) -> None:
                          changed or [["none", "", "", "", ""]]))  # fmt: skip
 
 
+def _verdicts(table: Path) -> str:
+    """The "Verdicts: ..." line of a printed sweep."""
+    for line in table.read_text(encoding="utf-8").splitlines():
+        if line.startswith("Verdicts: "):
+            return line.removeprefix("Verdicts: ")
+    return "?"
+
+
+def report(intro: Path, tables: list[Path], held_sources: Path) -> None:
+    """Print a results page of a tuning and a held-out half, each run before and after."""
+    from benchmarks._common import markdown_table
+
+    print(intro.read_text(encoding="utf-8").rstrip() + "\n")
+    rows = []
+    for line in held_sources.read_text(encoding="utf-8").splitlines():
+        sha, name, repo, commit, path = line.split("\t")
+        f = held_sources.parent / "held" / name
+        same = f.is_file() and hashlib.sha256(f.read_bytes()).hexdigest() == sha
+        rows.append([sha, name, f"{repo} @ {commit[:12]}", path, "yes" if same else "NO"])
+    print("Held-out files (frozen before any run; SHA-256 checked again now):\n")
+    print(markdown_table(["SHA-256", "file", "repository @ commit", "path", "same"], rows))
+    for title, (before, after) in (("Tuning half", tables[:2]), ("Held-out half", tables[2:])):
+        print(f"\n## {title}: before -> after\n")
+        print(f"Before: {_verdicts(before)}\n")
+        print(f"After: {_verdicts(after)}\n")
+        compare(before, after)
+
+
 def main() -> None:
     from benchmarks._common import header, markdown_table
 
     if sys.argv[1:2] == ["--compare"]:
         compare(Path(sys.argv[2]), Path(sys.argv[3]))
+        return
+    if sys.argv[1:2] == ["--report"]:
+        report(Path(sys.argv[2]), [Path(a) for a in sys.argv[3:7]], Path(sys.argv[7]))
         return
 
     ap = argparse.ArgumentParser()

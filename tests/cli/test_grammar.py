@@ -18,7 +18,7 @@ import pytest
 from imageform.cli import EXIT_CODES, main, root
 from imageform.cli._build import build_command
 from imageform.workflows import WORKFLOWS, choice_names
-from imageform.workflows._spec import flag_of
+from imageform.workflows._spec import IMAGE_SUFFIXES, flag_of
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -274,8 +274,7 @@ def test_a_file_option_without_its_value_names_it(
 DATA_OUTPUTS = [
     (name, wf.suffixes)
     for name, wf in WORKFLOWS.items()
-    if wf.output is not None
-    and set(wf.suffixes) - {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy", ".pgm", ".ppm"}
+    if wf.output is not None and set(wf.suffixes) - set(IMAGE_SUFFIXES)
 ]
 
 

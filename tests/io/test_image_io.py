@@ -207,7 +207,9 @@ def test_errors(tmp_path: Path) -> None:
     # an output name says what can be written, not the read-only formats alone (.webp, .dcm)
     with pytest.raises(InvalidInputError) as info:
         write_image(tmp_path / "out.txt", np.zeros((2, 2)))
-    assert str(info.value).endswith("and writes .png, .jpg, .jpeg, .tif, .tiff, .npy, .pgm, .ppm")
+    assert str(info.value).endswith(
+        "and writes .png, .jpg, .jpeg, .tif, .tiff, .npy, .pgm, .ppm, .pfm"
+    )
     assert not (tmp_path / "out.txt").exists()
     with pytest.raises(InvalidInputError, match="does not exist"):
         read_image(tmp_path / "missing.png")

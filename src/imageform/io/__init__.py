@@ -1,7 +1,9 @@
 """imageform.io: the one place where files are read and written.
 
-Images (PNG 8/16-bit, JPEG, TIFF, ``.npy``) with one rule for shape, alpha, orientation and
-memory bounds (:func:`read_image`, :func:`write_image`), and the colour space a file
+Images (PNG 8/16-bit, JPEG, TIFF, ``.npy``, Netpbm, PFM; more formats read: WebP, BMP, GIF,
+TGA, QOI, ICO, Radiance HDR, HEIF) with one rule for shape, alpha, orientation and
+memory bounds (:func:`read_image`, :func:`write_image`), one image of a stack or an animation
+(``frame=``, :func:`image_frames`), and the colour space a file
 declares in its ICC profile or tags, PNG's ``gAMA``/``cHRM`` included
 (:func:`image_color_space`); raw files (:func:`write_dng`,
 :func:`read_raw`, :func:`develop`, docs/raw.md); the one camera file, versioned TOML
@@ -40,11 +42,13 @@ from imageform.io.icc import (
 from imageform.io.image_io import (
     DEFAULT_MAX_PIXELS,
     IMAGE_FORMATS,
+    ImageFrames,
     ImageInfo,
     WrittenImage,
     image_color_space,
     image_files,
     image_format,
+    image_frames,
     image_info,
     max_pixels,
     pixel_size_um,
@@ -125,6 +129,7 @@ __all__ = [
     "ExifCamera",
     "Frame",
     "IccProfile",
+    "ImageFrames",
     "ImageInfo",
     "Interlacing",
     "Plan",
@@ -147,6 +152,7 @@ __all__ = [
     "image_color_space",
     "image_files",
     "image_format",
+    "image_frames",
     "image_info",
     "max_pixels",
     "open_video",

@@ -567,8 +567,8 @@ def multi_frame(p: Path, info: DicomInfo) -> InvalidInputError:
     return UnreadableFileError(
         p,
         f"a multi-frame DICOM of {info.frames} frames of {info.width} x "
-        f"{info.height} px; imageform reads one image per file: read a frame with "
-        "imageform.io.read_dicom(path, frame=i)",
+        f"{info.height} px; read one with frame=N, 0 to {info.frames - 1} (imageform info "
+        "and convert: --frame N)",
     )
 
 

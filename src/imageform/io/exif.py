@@ -166,7 +166,7 @@ def exif_camera(path: str | Path) -> ExifCamera:
     from imageform.io.image_io import _existing, _pillow_open, image_info
 
     p = _existing(path)
-    info = image_info(p)  # refuses what is no image, in one line
+    info = image_info(p, frame=0)  # refuses what is no image; a stack: its first image
     w, h = int(info.width), int(info.height)
     none = ExifCamera(False, None, None, None, None, None, None, None, None, w, h, None, None)
     if info.format not in ("jpeg", "tiff", "webp", "png", "heif"):

@@ -1,6 +1,7 @@
-"""The one image reader and writer: PNG, JPEG, TIFF, ``.npy``, PGM/PPM; more formats read.
+"""The one image reader and writer: PNG, JPEG, TIFF, ``.npy``, PGM/PPM, PFM; more formats read.
 
-HEIF, WebP, BMP, GIF, Netpbm (PBM, PAM too), TGA, QOI and DICOM are read, not written.
+HEIF, WebP, BMP, GIF, Netpbm (PBM, PAM too), TGA, QOI, ICO, Radiance HDR and DICOM are read,
+not written.
 
 One rule for every format:
 
@@ -13,16 +14,18 @@ One rule for every format:
 - **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
   (float16 is widened to float32). Other sample types are refused. A TIFF's samples are read
   as the values they mean: a palette through its colour map (RGB), a bilevel image as 0/255,
-  WhiteIsZero inverted; a CMYK, Lab or raw-YCbCr TIFF is refused; a palette BMP or GIF as RGB,
+  WhiteIsZero inverted; a CMYK TIFF as sRGB through its embedded CMYK ICC profile (LittleCMS,
+  8 and 16 bits; without one refused), a Lab or raw-YCbCr TIFF refused; a palette BMP or GIF as RGB,
   a 1-bit BMP as 0/255; a CMYK JPEG as sRGB, through its embedded CMYK ICC profile (LittleCMS)
   where it has one, else ``(1 - C)(1 - K)``. Samples of fewer bits than
   their container (10, 12, 14 bits in uint16) come as stored, the sensor's numbers (DN), as
   tifffile and scikit-image read them: measurements (``emva``, ``characterize``) need them so;
   such an image looks dark until scaled by ``65535 / (2**bits - 1)``.
 - **One image**: a TIFF holding a stack (pages, time points, z-planes) and an animated GIF or
-  WebP are refused in one line saying what they hold, rather than read as their first image;
-  so is a TIFF of more than 4 samples per pixel (multispectral bands), by :func:`image_info`
-  as by :func:`read_image`.
+  WebP are refused in one line saying what they hold and how to pick one, rather than read as
+  their first image; ``frame=N`` reads image ``N`` (:func:`image_frames` counts them). A TIFF
+  of more than 4 samples per pixel (multispectral bands) is refused, by :func:`image_info` as
+  by :func:`read_image`.
 - **Alpha** (grey+alpha, RGBA, a palette with transparency in PNG, GIF or BMP, WebP's alpha;
   extra samples in TIFF):
   dropped when every pixel is opaque; otherwise refused unless ``alpha="drop"`` (ignore it)
@@ -54,7 +57,14 @@ any other maxval scaled to the full range of 8 bits (below 256) or 16, ``round(v
 unlike a 12-bit TIFF's DN, a camera's PGM of maxval 4095 comes scaled: ``v * 4095 / 65535``
 gives its stored numbers back).
 A grey ``.pgm`` or RGB ``.ppm`` is written (binary, maxval 255 or 65535, no profile); the
-others are not (write PNG).
+others are not (write PNG). PFM (``.pfm``, :mod:`imageform.io._pfm`: Middlebury's disparities,
+HDR renderings) is read and written by imageform's own code as float32, grey (``Pf``) or RGB
+(``PF``), the scale's sign the byte order, rows stored bottom-up; the stored numbers are
+returned (as Pillow does; OpenCV divides them by the scale's magnitude), ``inf`` included.
+Radiance HDR (``.hdr``, RGBE, :mod:`imageform.io._hdr`) is read as float32 linear RGB,
+Radiance's ``(m + 0.5) * 2**(E - 136)`` (OpenCV's reader leaves out the ``+ 0.5``), the
+header's ``EXPOSURE`` not divided out; it is not written. ICO is read through Pillow as its
+largest image.
 DICOM (``.dcm``, ``.dicom``, or any file with ``DICM`` at byte 128) is read through pydicom
 (the ``dicom`` extra; :mod:`imageform.io.dicom` states its rules): the stored values through
 the Modality LUT (integers where the rescale is the identity, else float32), MONOCHROME1
@@ -89,7 +99,7 @@ from imageform._validate import (
     shorten,
 )
 from imageform.errors import InvalidInputError, UnreadableFileError
-from imageform.io import _netpbm
+from imageform.io import _hdr, _netpbm, _pfm
 from imageform.io._netpbm import is_netpbm
 
 if TYPE_CHECKING:
@@ -100,11 +110,13 @@ if TYPE_CHECKING:
 __all__ = [
     "DEFAULT_MAX_PIXELS",
     "IMAGE_FORMATS",
+    "ImageFrames",
     "ImageInfo",
     "WrittenImage",
     "image_color_space",
     "image_files",
     "image_format",
+    "image_frames",
     "image_info",
     "max_pixels",
     "pixel_size_um",
@@ -137,11 +149,14 @@ IMAGE_FORMATS = MappingProxyType(
         ".pam": "netpbm",
         ".tga": "tga",
         ".qoi": "qoi",
+        ".pfm": "pfm",
+        ".hdr": "hdr",
+        ".ico": "ico",
     }
 )
 
 #: The formats :func:`write_image` writes (the others of IMAGE_FORMATS are read only).
-_WRITTEN = ("png", "jpeg", "tiff", "npy", "netpbm")
+_WRITTEN = ("png", "jpeg", "tiff", "npy", "netpbm", "pfm")
 #: The Netpbm suffixes written: a binary PGM (grey) or PPM (RGB), 8 or 16 bits.
 _NETPBM_WRITTEN = {".pgm": 1, ".ppm": 3}
 
@@ -150,6 +165,8 @@ _NETPBM_WRITTEN = {".pgm": 1, ".ppm": 3}
 DEFAULT_MAX_PIXELS = 100_000_000
 
 _ALPHA = ("reject", "drop", "keep")
+#: The formats whose files may hold several images (``frame=`` picks one).
+_FRAMED = ("tiff", "dicom", "gif", "webp")
 #: The key of a TIFF's ImageDescription JSON (the one tifffile writes: ``{"shape": [...]}``)
 #: under which :func:`write_image` records a colour space that has no ICC profile (``lab``,
 #: ``xyz``, a ``linear_`` space ...) and :func:`image_color_space` reads it back.
@@ -166,7 +183,7 @@ class ImageInfo(NamedTuple):
 
     ``width``, ``height`` (upright, as :func:`read_image` returns it), ``channels``, sample
     ``dtype`` and ``format`` (png, jpeg, tiff, npy, heif, webp, bmp, gif, netpbm, tga, qoi,
-    dicom).
+    pfm, hdr, ico, dicom).
     """
 
     width: int
@@ -174,6 +191,19 @@ class ImageInfo(NamedTuple):
     channels: int
     dtype: str
     format: str
+
+
+class ImageFrames(NamedTuple):
+    """How many images a file holds, and along which axes (:func:`image_frames`).
+
+    ``total``: the images (1 for a file of one image); ``axes``: ``(words, length)`` for
+    each axis of a TIFF stack, in the file's order (``(("time points", 7), ("z-planes",
+    5))``), or ``(("frames", n),)`` for a multi-frame DICOM or an animated GIF or WebP; ``()``
+    for one image. ``frame=`` of :func:`read_image` is the flat index over them, from 0.
+    """
+
+    total: int
+    axes: tuple[tuple[str, int], ...]
 
 
 class _WrittenImage(NamedTuple):
@@ -376,36 +406,59 @@ _AXES_WORDS = {"T": "time points", "Z": "z-planes", "C": "channels", "Q": "pages
                "A": "angles", "L": "exposures", "V": "phases", "S": "samples"}  # fmt: skip
 
 
+def _stack_axes(axes: str, shape: tuple[int, ...]) -> tuple[tuple[str, int], ...]:
+    """Return the axes of a TIFF series other than the image plane (Y, X, samples), in words."""
+    return tuple((_AXES_WORDS.get(a, f"{a} axis"), int(n))
+                 for a, n in zip(axes, shape, strict=True) if a not in "YXS")  # fmt: skip
+
+
 def _tiff_stack(axes: str, shape: tuple[int, ...]) -> str:
-    """Say in words what a TIFF of more than one image holds, and what to do with it.
+    """Say in words what a TIFF of more than one image holds, and how to read one.
 
     ``axes`` ``"TZYX"`` of shape ``(7, 5, 167, 439)``: "a stack of 35 images of 439 x 167 px
-    (7 time points x 5 z-planes) ...".
+    (7 time points x 5 z-planes); read one with frame=N ...".
     """
     if "Y" not in axes or "X" not in axes:
         return f"a TIFF of shape {shape} with no image plane in it (axes {axes})"
     w, h = shape[axes.index("X")], shape[axes.index("Y")]
-    stack = [(n, _AXES_WORDS.get(a, f"{a} axis")) for a, n in zip(axes, shape, strict=True)
-             if a not in "YXS"]  # fmt: skip
-    count = math.prod(n for n, _ in stack)
-    parts = " x ".join(f"{n} {what}" for n, what in stack)
+    stack = _stack_axes(axes, shape)
+    count = math.prod(n for _, n in stack)
+    parts = " x ".join(f"{n} {what}" for what, n in stack)
     return (
-        f"a stack of {count} images of {w} x {h} px ({parts}); imageform reads one image per "
-        "file: save the one you need as its own TIFF (tifffile.imread(path, key=0), or Fiji's "
-        "Stack to Images)"
+        f"a stack of {count} images of {w} x {h} px ({parts}); read one with frame=N, "
+        f"0 to {count - 1} (imageform info and convert: --frame N)"
     )
 
 
-def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
+def _check_frame(path: Path, frame: object, count: int) -> int:
+    """Return ``frame`` as an index into the ``count`` images of ``path``, else one line."""
+    if isinstance(frame, bool) or not isinstance(frame, (int, np.integer)):
+        raise InvalidInputError(f"expected frame as an int >= 0, got {frame!r}")
+    if not 0 <= int(frame) < count:
+        held = "one image (frame 0)" if count == 1 else f"{count} images (frames 0 to {count - 1})"
+        raise InvalidInputError(f"frame {int(frame)} is out of range: {path} holds {held}")
+    return int(frame)
+
+
+def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, ImageInfo]:
+    """Return the first series of a TIFF and what one image of it is (a stack needs frame)."""
     if not tif.series:
         raise UnreadableFileError(path, "the TIFF holds no image")
     series = tif.series[0]
     axes = series.axes
     shape = series.shape
-    channels = shape[axes.index("S")] if "S" in axes else 1
-    if "Y" not in axes or "X" not in axes or any(a not in "YXS" for a in axes):
+    if "Y" not in axes or "X" not in axes:
+        raise UnreadableFileError(path, _tiff_stack(axes, shape))
+    stack = _stack_axes(axes, shape)
+    if stack and frame is None:
         # pages, time points, z-planes or channels of their own (axes QYX, CYX...): a stack
         raise UnreadableFileError(path, _tiff_stack(axes, shape))
+    if frame is not None:
+        _check_frame(path, frame, math.prod(n for _, n in stack))
+    channels = shape[axes.index("S")] if "S" in axes else 1
+    page = _frame_page(tif, series, frame)
+    if channels in (4, 5) and _tiff_cmyk_profile(page) is not None:  # read as sRGB (+ alpha)
+        channels -= 1
     if channels > 4:  # refused here, so that image_info says what read_image does
         raise UnreadableFileError(
             path,
@@ -416,13 +469,63 @@ def _tiff_series(tif: Any, path: Path) -> tuple[Any, ImageInfo]:
         )
     width, height = shape[axes.index("X")], shape[axes.index("Y")]
     dtype = "uint8" if series.dtype == np.bool_ else str(series.dtype)  # bilevel: 0/255
-    page = tif.pages[0]
     if int(page.photometric) == 3 and page.colormap is not None:  # palette: RGB, as read
         cmap = np.asarray(page.colormap)
         eight = int(cmap.max(initial=0)) < 256 or not np.any(cmap % 257)
         channels, dtype = 3, "uint8" if eight else "uint16"
     info = ImageInfo(width, height, channels, dtype, "tiff")
     return series, info
+
+
+def image_frames(path: str | Path) -> ImageFrames:
+    """Count the images a file holds: a TIFF stack's, a DICOM's frames, a GIF's or WebP's.
+
+    A TIFF's first series (what :func:`read_image` reads) is a stack when it has axes other
+    than the image plane: pages, z-planes, time points, channels of their own (tifffile's
+    series axes, from ImageJ or OME metadata or the pages); its images are counted without
+    decoding any. Other files hold one image.
+
+    Raises
+    ------
+    InvalidInputError
+        The file is missing or not an image of a known format.
+
+    Examples
+    --------
+    >>> import tifffile
+    >>> p = getfixture("tmp_path") / "zt.ome.tif"
+    >>> tifffile.imwrite(p, np.zeros((3, 2, 4, 5), np.uint16), metadata={"axes": "TZYX"})
+    >>> image_frames(p)
+    ImageFrames(total=6, axes=(('time points', 3), ('z-planes', 2)))
+    >>> read_image(p, frame=5).shape
+    (4, 5, 1)
+    """
+    fmt = _suffix_format(path) if isinstance(path, (str, os.PathLike)) else ""
+    p = _existing(path)
+    fmt = _content_format(p, fmt)
+    axes: tuple[tuple[str, int], ...] = ()
+    if fmt == "tiff":
+        try:
+            with _tifffile().TiffFile(p) as tif:
+                if tif.series:
+                    axes = _stack_axes(tif.series[0].axes, tif.series[0].shape)
+        except Exception as exc:
+            raise UnreadableFileError(p, f"{_one_line(exc)}") from None
+    elif fmt == "dicom":
+        from imageform.io import dicom
+
+        n = dicom.header(p, dicom.open_dicom(p, pixels=False)).frames
+        axes = (("frames", n),) if n > 1 else ()
+    elif fmt in ("gif", "webp"):
+        try:
+            with _pillow_open(p) as im:
+                if getattr(im, "is_animated", False):
+                    axes = (("frames", int(im.n_frames)),)
+        except (OSError, SyntaxError, ValueError) as exc:
+            raise UnreadableFileError(p, f"{_one_line(exc)}") from None
+    else:
+        image_info(p)  # a file of one image: readable?
+    return ImageFrames(math.prod(n for _, n in axes), axes)
 
 
 def pixel_size_um(path: str | Path) -> tuple[float, float] | None:
@@ -471,20 +574,31 @@ def pixel_size_um(path: str | Path) -> tuple[float, float] | None:
     return x, float(ys.group(1)) if ys else x
 
 
-def image_info(path: str | Path) -> ImageInfo:
+def image_info(path: str | Path, *, frame: int | None = None) -> ImageInfo:
     """Width, height, channels and sample type from the file's header, without decoding.
 
     Width and height are those of the image :func:`read_image` returns: an EXIF orientation
     of 5 to 8 (a photograph taken upright, stored on its side) swaps the stored ones.
 
+    Parameters
+    ----------
+    path : str or Path
+        An image file of :data:`IMAGE_FORMATS`.
+    frame : int, optional
+        The image of a file holding several (a TIFF stack, a multi-frame DICOM, an animated
+        GIF or WebP; :func:`image_frames` counts them), from 0, as :func:`read_image` takes it.
+
     Raises
     ------
     InvalidInputError
-        The file is missing or not an image of a known format.
+        The file is missing or not an image of a known format; a file of several images
+        without ``frame``; a ``frame`` out of range.
     """
     fmt = _suffix_format(path) if isinstance(path, (str, os.PathLike)) else ""
     p = _existing(path)
     fmt = _content_format(p, fmt)
+    if frame is not None and fmt not in _FRAMED:
+        _check_frame(p, frame, 1)
     if fmt == "png":
         with p.open("rb") as fh:
             head = _png_header(p, fh.read(33))
@@ -498,7 +612,7 @@ def image_info(path: str | Path) -> ImageInfo:
         tifffile = _tifffile()
         try:
             with tifffile.TiffFile(p) as tif:
-                head = _tiff_series(tif, p)[1]
+                head = _tiff_series(tif, p, frame)[1]
                 tag = tif.pages[0].tags.get(274)
                 return _upright(head, int(tag.value) if tag is not None else 1)
         except InvalidInputError:
@@ -509,18 +623,29 @@ def image_info(path: str | Path) -> ImageInfo:
         with p.open("rb") as fh:
             nh = _netpbm.header(fh.read(1 << 16), p)
         return ImageInfo(nh.width, nh.height, nh.channels, nh.dtype, "netpbm")
+    if fmt == "pfm":
+        with p.open("rb") as fh:
+            ph = _pfm.header(fh.read(256), p)
+        _pfm.check_size(ph, p.stat().st_size, p)  # uncompressed: its size is known
+        return ImageInfo(ph.width, ph.height, ph.channels, "float32", "pfm")
+    if fmt == "hdr":
+        with p.open("rb") as fh:
+            hh = _hdr.header(fh.read(1 << 16), p)
+        return ImageInfo(hh.width, hh.height, 3, "float32", "hdr")
     if fmt == "heif":
         return _heif_info(_open_heif(p))  # libheif's size: its rotation applied
     if fmt == "dicom":
         from imageform.io import dicom
 
         d = dicom.header(p, dicom.open_dicom(p, pixels=False))
-        if d.frames > 1:  # refused, as read_image refuses it
+        if frame is not None:
+            _check_frame(p, frame, d.frames)
+        elif d.frames > 1:  # refused, as read_image refuses it
             raise dicom.multi_frame(p, d)
         return ImageInfo(d.width, d.height, d.channels, d.dtype, "dicom")
     try:
         with _pillow_open(p) as im:
-            _refuse_animation(p, im, fmt)
+            _pillow_frame(p, im, fmt, frame)
             w, h = im.size
             head = ImageInfo(w, h, _pillow_channels(im, fmt), "uint8", fmt or "jpeg")
             return _upright(head, _pillow_orientation(im))
@@ -588,16 +713,24 @@ def _pillow_open(p: Path) -> Iterator[Any]:
         yield im
 
 
-def _refuse_animation(p: Path, im: Any, fmt: str) -> None:
-    """Refuse an animated GIF or WebP (several frames) in one line, as a stack TIFF is."""
-    if not getattr(im, "is_animated", False):
-        return
-    name = {"gif": "GIF", "webp": "WebP"}.get(fmt, fmt.upper())
-    raise UnreadableFileError(
-        p,
-        f"an animated {name} of {int(im.n_frames)} frames; imageform reads "
-        "one image (save the frame you need as PNG)",
-    )
+def _pillow_frame(p: Path, im: Any, fmt: str, frame: int | None) -> None:
+    """Seek an animated GIF or WebP to ``frame``; refuse one without it, as a stack TIFF is.
+
+    Pillow composes each frame of a GIF over the ones before it (its disposal methods), so a
+    frame comes as the viewer shows it at that point, not as its own patch.
+    """
+    count = int(getattr(im, "n_frames", 1)) if getattr(im, "is_animated", False) else 1
+    if frame is None:
+        if count == 1:
+            return
+        name = {"gif": "GIF", "webp": "WebP"}.get(fmt, fmt.upper())
+        raise UnreadableFileError(
+            p,
+            f"an animated {name} of {count} frames; read one with frame=N, 0 to {count - 1} "
+            "(imageform info and convert: --frame N)",
+        )
+    if _check_frame(p, frame, count):
+        im.seek(int(frame))
 
 
 def _refuse_short_raw(p: Path, im: Any) -> None:
@@ -724,6 +857,12 @@ def _content_format(p: Path, fmt: str) -> str:
         found = "bmp"  # its DIB header's size, so that text starting "BM" is not one
     elif is_netpbm(head):
         found = "netpbm"
+    elif _pfm.is_pfm(head):
+        found = "pfm"
+    elif _hdr.is_hdr(head):
+        found = "hdr"
+    elif head[:4] == b"\0\0\1\0" and fmt == "ico":  # ICONDIR, type 1 (no magic of its own)
+        found = "ico"
     elif head.startswith(b"qoif"):
         found = "qoi"
     elif head.startswith((b"\xff\x0a", b"\0\0\0\x0cJXL ")):
@@ -737,8 +876,8 @@ def _content_format(p: Path, fmt: str) -> str:
             p,
             f"it holds {'an' if found[0] in 'AEIOU' else 'a'} {found} image, "
             f"not {fmt.upper()}; imageform reads "
-            "PNG, JPEG, TIFF, WebP, BMP, GIF, Netpbm, TGA, QOI, .npy, HEIF and DICOM (convert "
-            "it to one of them)",
+            "PNG, JPEG, TIFF, WebP, BMP, GIF, Netpbm, PFM, Radiance HDR, TGA, QOI, ICO, .npy, "
+            "HEIF and DICOM (convert it to one of them)",
         )
     return found
 
@@ -873,7 +1012,7 @@ def _png_decode_interlaced(data: bytes) -> Any:
     return arr
 
 
-def _read_pillow(p: Path, limit: int, fmt: str = "jpeg") -> np.ndarray:
+def _read_pillow(p: Path, limit: int, fmt: str = "jpeg", frame: int | None = None) -> np.ndarray:
     """Decode a JPEG, WebP, BMP or GIF with Pillow, upright (EXIF orientation of JPEG, WebP).
 
     A palette (BMP, GIF) comes as RGB, or RGBA where an index is transparent; a grey GIF with
@@ -882,7 +1021,7 @@ def _read_pillow(p: Path, limit: int, fmt: str = "jpeg") -> np.ndarray:
     """
     try:
         with _pillow_open(p) as im:
-            _refuse_animation(p, im, fmt)
+            _pillow_frame(p, im, fmt, frame)
             w, h = im.size
             _check_pixels(p, ImageInfo(w, h, len(im.getbands()), "uint8", fmt), limit)
             _refuse_short_raw(p, im)
@@ -966,13 +1105,52 @@ def _tifffile() -> Any:
     return tifffile
 
 
-def _read_tiff(p: Path, limit: int) -> tuple[np.ndarray, bool]:
+def _frame_page(tif: Any, series: Any, frame: int | None) -> Any:
+    """Return the page whose tags describe image ``frame`` of a series (else the first page).
+
+    Pages of a stack share their shape and sample type but may each have their own colour
+    map (a palette per page), photometric or orientation: a stack stored a page per image
+    takes that page's. A page tifffile loads as a TiffFrame (no tags of its own) is described
+    by its key frame.
+    """
+    if frame is None or not frame:
+        return tif.pages[0]
+    stack = [n for a, n in zip(series.axes, series.shape, strict=True) if a not in "YXS"]
+    if len(series.pages) != math.prod(stack):
+        return tif.pages[0]
+    page = series.pages[frame]
+    return page if hasattr(page, "tags") else series.keyframe
+
+
+def _tiff_frame(series: Any, path: Path, frame: int | None) -> tuple[np.ndarray, str]:
+    """Decode one image of a TIFF series (``frame`` of a stack, else its one image).
+
+    Returns the samples and their axes (``YX``, ``YXS`` or ``SYX``). A stack stored one page
+    per image (ImageJ, OME, tifffile's pages) decodes that page alone; another layout decodes
+    the series, its memory checked first, and takes the image from it.
+    """
+    axes, shape = series.axes, series.shape
+    plane = "".join(a for a in axes if a in "YXS")
+    stack = [n for a, n in zip(axes, shape, strict=True) if a not in "YXS"]
+    if frame is None or not stack:
+        return np.asarray(series.asarray()), plane
+    if len(series.pages) == math.prod(stack):  # one page per image
+        return np.asarray(series.asarray(key=frame)), str(series.keyframe.axes)
+    need = math.prod(shape) * np.dtype(series.dtype).itemsize
+    check_memory(need, str(path), f"a TIFF series of shape {format_shape(tuple(shape))}")
+    index = np.unravel_index(frame, stack)
+    whole = np.asarray(series.asarray())
+    pick = iter(index)
+    return whole[tuple(next(pick) if a not in "YXS" else slice(None) for a in axes)], plane
+
+
+def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarray, bool]:
     tifffile = _tifffile()
     try:
         with tifffile.TiffFile(p) as tif:
-            series, info = _tiff_series(tif, p)
+            series, info = _tiff_series(tif, p, frame)
             _check_pixels(p, info, limit)
-            page = tif.pages[0]
+            page = _frame_page(tif, series, frame)
             tag = page.tags.get(274)
             orientation = int(tag.value) if tag is not None else 1
             axes = series.axes
@@ -980,8 +1158,10 @@ def _read_tiff(p: Path, limit: int) -> tuple[np.ndarray, bool]:
             photometric = int(page.photometric)
             bits = int(page.bitspersample)
             colormap = page.colormap if photometric == 3 else None
-            _refuse_tiff_color(p, photometric, int(page.compression))
-            arr = np.asarray(series.asarray())
+            cmyk = _tiff_cmyk_profile(page)
+            if cmyk is None:
+                _refuse_tiff_color(p, photometric, int(page.compression))
+            arr, axes = _tiff_frame(series, p, frame)
     except InvalidInputError:
         raise
     except MemoryError:
@@ -990,14 +1170,62 @@ def _read_tiff(p: Path, limit: int) -> tuple[np.ndarray, bool]:
         raise UnreadableFileError(p, f"{_one_line(exc)}") from None
     if arr.ndim == 3 and "S" in axes and axes.index("S") < axes.index("Y"):
         arr = np.moveaxis(arr, 0, -1)
+    if cmyk is not None:
+        return _orient(_tiff_cmyk_to_rgb(p, arr, cmyk), orientation), extra > 0
     arr = _tiff_samples(p, arr, photometric, bits, colormap)
     return _orient(arr, orientation), extra > 0
 
 
+def _tiff_cmyk_profile(page: Any) -> bytes | None:
+    """Return the CMYK ICC profile of a CMYK TIFF page (photometric 5, InkSet CMYK), else None.
+
+    Such a page is read through its profile (:func:`_tiff_cmyk_to_rgb`); one without a profile,
+    or with a profile of another colour space, is refused as before (no exact conversion).
+    """
+    if int(page.photometric) != 5 or int(getattr(page, "inkset", 1) or 1) != 1:
+        return None
+    tag = page.tags.get(34675)
+    icc = bytes(tag.value) if tag is not None else b""
+    return icc if len(icc) >= 20 and icc[16:20] == b"CMYK" else None
+
+
+def _tiff_cmyk_to_rgb(p: Path, arr: np.ndarray, profile: bytes) -> np.ndarray:
+    """Convert a CMYK TIFF's samples (uint8 or uint16; alpha after them kept) to sRGB.
+
+    LittleCMS (imagecodecs' ``cms_transform``) from the embedded CMYK profile to LittleCMS's
+    built-in sRGB with the perceptual intent: what :func:`_cmyk_to_rgb` does for a CMYK JPEG
+    through Pillow's ImageCms (the same library; equal codes on 8 bits), here for 16 bits too.
+    TIFF's CMYK is not inverted (0 is no ink), as the profile expects.
+    """
+    import imagecodecs
+
+    if arr.ndim != 3 or arr.shape[-1] not in (4, 5) or arr.dtype not in (np.uint8, np.uint16):
+        raise UnreadableFileError(
+            p, f"a CMYK TIFF of {arr.dtype} samples of shape {arr.shape}; imageform converts "
+            "8 and 16-bit CMYK (+ alpha) through the embedded profile"
+        )  # fmt: skip
+    from PIL import ImageCms
+
+    srgb = ImageCms.ImageCmsProfile(_srgb_cms_profile()).tobytes()
+    try:
+        rgb = imagecodecs.cms_transform(
+            np.ascontiguousarray(arr[..., :4]), profile, srgb, colorspace="cmyk",
+            outcolorspace="rgb", intent=0, outdtype=arr.dtype,
+        )  # fmt: skip
+    except Exception as exc:  # a corrupt or unusable profile
+        raise UnreadableFileError(
+            p, f"its CMYK ICC profile cannot be applied ({_one_line(exc)})"
+        ) from None
+    rgb = np.asarray(rgb).reshape(*arr.shape[:2], 3)
+    if arr.shape[-1] == 5:
+        rgb = np.concatenate([rgb, arr[..., 4:]], axis=-1)
+    return rgb
+
+
 #: TIFF photometric interpretations whose samples are not RGB or grey values (TIFF 6.0,
 #: TIFF-F/FX, libtiff): read as they are stored, they would pass for RGB.
-_TIFF_NOT_RGB = {5: "CMYK (separated)", 8: "CIELab", 9: "ICCLab", 10: "ITULab", 32844: "LogL",
-                 32845: "LogLuv"}  # fmt: skip
+_TIFF_NOT_RGB = {5: "CMYK (separated, no CMYK ICC profile)", 8: "CIELab", 9: "ICCLab",
+                 10: "ITULab", 32844: "LogL", 32845: "LogLuv"}  # fmt: skip
 
 
 def _refuse_tiff_color(p: Path, photometric: int, compression: int) -> None:
@@ -1102,7 +1330,11 @@ def _normalise(p: Path, arr: np.ndarray, alpha: str, has_alpha: bool) -> np.ndar
 
 
 def read_image(
-    path: str | Path, *, alpha: str = "reject", max_pixels: int | None = None
+    path: str | Path,
+    *,
+    alpha: str = "reject",
+    max_pixels: int | None = None,
+    frame: int | None = None,
 ) -> np.ndarray:
     """Read an image file as ``(H, W, C)``: uint8/uint16 as stored, floats as stored.
 
@@ -1110,7 +1342,8 @@ def read_image(
     ----------
     path : str or Path
         A ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff``, ``.npy``, ``.webp``, ``.bmp``,
-        ``.gif``, Netpbm (``.pgm``, ``.ppm``, ``.pbm``, ``.pnm``, ``.pam``), ``.tga``, ``.qoi``
+        ``.gif``, Netpbm (``.pgm``, ``.ppm``, ``.pbm``, ``.pnm``, ``.pam``), ``.pfm``,
+        ``.hdr``, ``.tga``, ``.qoi``, ``.ico``
         or HEIF file (:data:`IMAGE_FORMATS`), or a DICOM file under any name (the
         ``dicom`` extra; its values through the Modality LUT, see :func:`read_dicom`).
     alpha : {"reject", "drop", "keep"}
@@ -1120,6 +1353,12 @@ def read_image(
     max_pixels : int, optional
         Refuse images with more pixels (default :func:`max_pixels`), checked from the header
         before decoding.
+    frame : int, optional
+        The image to read of a file that holds several, from 0: a TIFF stack's (pages,
+        z-planes, time points, channels of their own: the flat index over them, in the
+        file's order, tifffile's ``key``), a multi-frame DICOM's, an animated GIF's or WebP's.
+        :func:`image_frames` counts them. None: the file must hold one image. A file of one
+        image takes ``frame=0``.
 
     Returns
     -------
@@ -1131,7 +1370,8 @@ def read_image(
     InvalidInputError
         Missing, unreadable, truncated or corrupt file; too many pixels; transparent pixels
         with ``alpha="reject"``; an unsupported sample type or shape; a TIFF stack, an
-        animated GIF or WebP or a multi-frame DICOM (more than one image).
+        animated GIF or WebP or a multi-frame DICOM (more than one image) without ``frame``;
+        a ``frame`` out of range.
     UnknownOptionError
         An unknown ``alpha``.
 
@@ -1148,6 +1388,8 @@ def read_image(
     fmt = _suffix_format(path) if isinstance(path, (str, os.PathLike)) else ""
     p = _existing(path)
     fmt = _content_format(p, fmt)
+    if frame is not None and fmt not in _FRAMED:
+        _check_frame(p, frame, 1)
     has_alpha = False
     if fmt == "png":
         arr = _read_png(p, limit)
@@ -1155,17 +1397,30 @@ def read_image(
     elif fmt == "jpeg":
         arr = _read_pillow(p, limit)
     elif fmt in ("webp", "bmp", "gif", "tga", "qoi"):
-        arr = _read_pillow(p, limit, fmt)
+        arr = _read_pillow(p, limit, fmt, frame)
         has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     elif fmt == "tiff":
-        arr, has_alpha = _read_tiff(p, limit)
+        arr, has_alpha = _read_tiff(p, limit, frame)
     elif fmt == "heif":
         arr = _read_heif(p, limit)
         has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     elif fmt == "dicom":
-        arr = _read_dicom(p, limit)
+        arr = _read_dicom(p, limit, frame)
     elif fmt == "netpbm":
         arr, has_alpha = _read_netpbm(p, limit)
+    elif fmt == "pfm":
+        with p.open("rb") as fh:
+            ph = _pfm.header(fh.read(256), p)
+        _check_pixels(p, ImageInfo(ph.width, ph.height, ph.channels, "float32", fmt), limit)
+        arr = _pfm.read(p, p.read_bytes())
+    elif fmt == "hdr":
+        with p.open("rb") as fh:
+            hh = _hdr.header(fh.read(1 << 16), p)
+        _check_pixels(p, ImageInfo(hh.width, hh.height, 3, "float32", fmt), limit)
+        arr = _hdr.read(p, p.read_bytes())
+    elif fmt == "ico":
+        arr = _read_pillow(p, limit, fmt)
+        has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     else:
         arr = _read_npy(p, limit)
     return _normalise(p, arr, alpha, has_alpha)
@@ -1361,8 +1616,10 @@ def write_image(
     Parameters
     ----------
     path : str or Path
-        ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff``, ``.npy``, or ``.pgm`` (grey) /
-        ``.ppm`` (RGB): binary Netpbm of maxval 255 or 65535, with no colour profile.
+        ``.png``, ``.jpg``/``.jpeg``, ``.tif``/``.tiff``, ``.npy``, ``.pgm`` (grey) /
+        ``.ppm`` (RGB): binary Netpbm of maxval 255 or 65535, with no colour profile, or
+        ``.pfm`` (grey or RGB float32, little-endian; integers as ``v / (2**bits - 1)``; any
+        float stored as it is, no profile).
     image : array_like (H, W) or (H, W, C), C in 1..4
         Floats in [0, 1] (encoded values), uint8 or uint16.
     bit_depth : {8, 16}, optional
@@ -1445,14 +1702,16 @@ def write_image(
     if fmt == "netpbm" and p.suffix.lower() not in _NETPBM_WRITTEN:
         fmt = {".pbm": "PBM", ".pam": "PAM"}.get(p.suffix.lower(), "PNM")  # read only
     if fmt not in _WRITTEN:
-        name = {"heif": "HEIF", "webp": "WebP"}.get(fmt, fmt.upper())
+        name = {"heif": "HEIF", "webp": "WebP", "hdr": "Radiance HDR"}.get(fmt, fmt.upper())
         raise InvalidInputError(
-            f"imageform reads {name} but does not write it; write a .png, .jpg, .tif, .pgm or "
-            ".ppm file"
+            f"imageform reads {name} but does not write it; write a .png, .jpg, .tif, .pgm, "
+            ".ppm or .pfm file"
         )
     if fmt == "npy":
         atomic_write(p, lambda t: np.save(t, a, allow_pickle=False))
         return WrittenImage(None, 0)
+    if fmt == "pfm":
+        return _write_pfm(p, shown, a, bits, color_space)
     if fmt == "tiff":
         tifffile = _tifffile()
         n_out = 0
@@ -1511,6 +1770,34 @@ def write_image(
     return WrittenImage(depth, n_out)
 
 
+def _write_pfm(
+    p: Path, shown: Path, a: np.ndarray, bits: int | None, color_space: str | None
+) -> WrittenImage:
+    """Write a grey (``Pf``) or RGB (``PF``) PFM: float32, little-endian, rows bottom-up.
+
+    Floats are stored as they are (values above 1, negative disparities, ``inf`` included);
+    uint8 and uint16 as the encoded values they mean, ``v / (2**bits - 1)``.
+    """
+    have = a.shape[-1] if a.ndim == 3 else 1
+    if have not in (1, 3):
+        kind = {2: "grey with alpha", 4: "RGB with alpha"}[have]
+        raise InvalidInputError(
+            f"PFM holds grey or RGB images, this one is {kind}; write {shown.stem}.tif"
+        )
+    if bits is not None:
+        raise InvalidInputError(f"PFM stores float32 samples: bit_depth {bits} has no meaning")
+    if color_space is not None and str(color_space).strip().lower() != "srgb":
+        raise InvalidInputError(
+            f"PFM has no colour profile; write {shown.stem}.tif to declare {color_space}"
+        )
+    if a.dtype.kind == "u":
+        if a.dtype not in (np.uint8, np.uint16):
+            raise InvalidInputError(f"expected floats, uint8 or uint16 to write {p}, got {a.dtype}")
+        a = a.astype(np.float32) / np.float32(np.iinfo(a.dtype).max)
+    atomic_write(p, lambda t: t.write_bytes(_pfm.encode(a)))
+    return WrittenImage(None, 0)
+
+
 def _with_iccp(png: bytes, profile: bytes) -> bytes:
     """``png`` with an ``iCCP`` chunk (PNG 3rd ed. sec. 11.3.2.3) right after ``IHDR``."""
     import struct
@@ -1539,7 +1826,9 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     uncalibrated with the interoperability index ``R03`` (Adobe RGB, the DCF option camera
     JPEGs use); a TIFF without a profile whose ImageDescription JSON names a space under
     ``imageform_color_space`` (what :func:`write_image` records for a space without a
-    profile: ``lab``, ``xyz`` ...; source ``tiff-description``). A profile imageform does not
+    profile: ``lab``, ``xyz`` ...; source ``tiff-description``); a Radiance HDR file's linear
+    RGB, ``linear_srgb`` (Rec. 709 primaries, Radiance's default) unless its ``PRIMARIES=``
+    line gives others (then None; source ``radiance``). A profile imageform does not
     recognise gives ``name`` None with its description; ``.npy`` files and files that
     declare nothing give ``(None, "none", "")``.
 
@@ -1579,8 +1868,12 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     if not p.is_file():
         raise UnreadableFileError(p, "no such file")
     fmt = _content_format(p, fmt)
-    if fmt in ("npy", "netpbm"):
+    if fmt in ("npy", "netpbm", "pfm"):
         return DeclaredColorSpace(None, "none", "")
+    if fmt == "hdr":
+        with p.open("rb") as fh:
+            name, said = _hdr.declared(fh.read(1 << 16), p)
+        return DeclaredColorSpace(name, "radiance", said)
     if fmt == "bmp":
         icc_bmp = _bmp_profile(p)
         if icc_bmp:
@@ -1602,8 +1895,12 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
                 tag = page.tags.get(34675)
                 icc_tiff = bytes(tag.value) if tag is not None else b""
                 description = page.description
+                cmyk_tiff = _tiff_cmyk_profile(page) is not None
         except Exception as exc:
             raise UnreadableFileError(p, f"{_one_line(exc)}") from None
+        if cmyk_tiff:  # read_image converts it through its profile to sRGB
+            desc = parse_icc(icc_tiff).description
+            return DeclaredColorSpace("srgb", "icc", f"{desc} (CMYK, read as sRGB)")
         if icc_tiff:
             return declared_by_profile(icc_tiff)
         recorded = _recorded_space(description)

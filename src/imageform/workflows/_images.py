@@ -174,7 +174,14 @@ def gpu_bands(run: Run, what: str, fn: Any) -> Any:
     return band
 
 
-def read(path: Path, opts: Any, *, alpha: str | None = None, colours: bool = False) -> Any:
+def read(
+    path: Path,
+    opts: Any,
+    *,
+    alpha: str | None = None,
+    colours: bool = False,
+    frame: int | None = None,
+) -> Any:
     """Read ``path`` with the options' alpha rule and pixel limit (an :class:`ImageIn`).
 
     ``colours``: the pixels are read as colours, so integer TIFF samples of fewer bits than
@@ -182,6 +189,7 @@ def read(path: Path, opts: Any, *, alpha: str | None = None, colours: bool = Fal
     is white) are scaled to the container's full range, as a PNG stores them. ``read_image``
     keeps them as stored (a sensor's numbers, DN, which the measuring commands read as
     such); read as colours unscaled, a 10-bit photograph came out 64 times too dark.
+    ``frame``: the image of a file that holds several (``read_image``'s ``frame``).
     """
     from imageform.io import read_image
 
@@ -189,6 +197,7 @@ def read(path: Path, opts: Any, *, alpha: str | None = None, colours: bool = Fal
         path,
         alpha=str(alpha or getattr(opts, "alpha", "reject")),
         max_pixels=getattr(opts, "max_pixels", None),
+        frame=frame,
     )
     return full_range(path, img) if colours else img
 
@@ -466,6 +475,7 @@ def declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
                 "png-gama": f"its PNG gAMA/cHRM chunks ({declared.description})",
                 "png-chrm": f"its PNG cHRM chunk ({declared.description})",
                 "tiff-description": "its TIFF description (written by imageform)",
+                "radiance": "its Radiance HDR header (linear RGB)",
             }.get(declared.source, "its EXIF tags")
             run.note(f"note: {image} declares {declared.name} in {how}; read as {declared.name}"
                      " (--from overrides)")  # fmt: skip

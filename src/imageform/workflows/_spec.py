@@ -40,7 +40,7 @@ __all__ = [
 ]
 
 #: Image file suffixes that workflows read and write (.pgm grey, .ppm RGB: Netpbm, no profile).
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy", ".pgm", ".ppm")
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy", ".pgm", ".ppm", ".pfm")
 
 
 def option(

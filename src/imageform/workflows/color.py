@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -173,8 +174,9 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
     )
     frame: int | None = option(
         None,
-        help="DICOM input: the frame of a multi-frame file (a cine, a CT or fluoroscopy run) to "
-        "convert, 0 the first (imageform info says how many).",
+        help="The image to convert of a file holding several: a TIFF stack's (pages, z-planes, "
+        "time points, channels), a multi-frame DICOM's, an animated GIF's or WebP's; 0 the "
+        "first (imageform info lists them).",
         metavar="N",
     )
 
@@ -230,9 +232,10 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
         from imageform.io.icc import RGB_PROFILED
 
         fmt = image_format(path)
-        if fmt == "netpbm" and self.dst in RGB_PROFILED and self.dst != "srgb":
+        if fmt in ("netpbm", "pfm") and self.dst in RGB_PROFILED and self.dst != "srgb":
+            name = "Netpbm" if fmt == "netpbm" else "PFM"
             raise InvalidInputError(
-                f"Netpbm has no colour profile to declare {self.dst}: write {path.stem}.png or "
+                f"{name} has no colour profile to declare {self.dst}: write {path.stem}.png or "
                 f"{path.stem}.tif"
             )
         if fmt in ("png", "jpeg", "netpbm") and self.dst not in _DISPLAYABLE:
@@ -278,23 +281,29 @@ def _window_option(value: object) -> str | tuple[float, float]:
 
 
 def _read_dicom(image: Path, opts: ConvertOptions) -> Any:
-    """Read a DICOM input's ``--frame`` through ``--window``; refuse another file in one line.
+    """Read the input's ``--frame``, a DICOM's through ``--window``; else one line.
 
-    A multi-frame file without ``--frame`` is refused naming the option (``read_image``'s
-    refusal names the Python call).
+    A file of several images without ``--frame`` is refused naming the option
+    (``read_image``'s refusal names the Python call); ``--window`` applies to DICOM alone.
     """
-    from imageform.io import dicom_info, image_info, read_dicom
+    from imageform.io import image_frames, image_info, read_dicom
 
-    given = "--window" if opts.window is not None else "--frame"
-    if opts.window is None and opts.frame is None:
-        if not _is_dicom(image) or (frames := dicom_info(image).frames) <= 1:
-            return read(image, opts, colours=True)
-        raise InvalidInputError(
-            f"{image} is a multi-frame DICOM of {frames} frames; convert one with --frame N "
-            f"(0 to {frames - 1})"
-        )
-    if not _is_dicom(image) and image_info(image).format != "dicom":
-        raise InvalidInputError(f"{given} applies to DICOM input; {image} is not a DICOM file")
+    if opts.frame is None:
+        frames = image_frames(image)
+        if frames.total > 1:
+            what = " x ".join(f"{n} {w}" for w, n in frames.axes)
+            held = (
+                f"is a multi-frame DICOM of {frames.total} frames"
+                if _is_dicom(image)
+                else f"holds {frames.total} images ({what})"
+            )
+            raise InvalidInputError(
+                f"{image} {held}; convert one with --frame N (0 to {frames.total - 1})"
+            )
+    if opts.window is None and not _is_dicom(image):
+        return read(image, opts, colours=True, frame=opts.frame)
+    if not _is_dicom(image) and image_info(image, frame=opts.frame).format != "dicom":
+        raise InvalidInputError(f"--window applies to DICOM input; {image} is not a DICOM file")
     return read_dicom(image, frame=opts.frame, window=opts.window, max_pixels=opts.max_pixels)
 
 
@@ -893,8 +902,8 @@ def palette_check(run: Run, opts: PaletteCheckOptions, *, out: None, colors: str
 
 _IMG = Input(
     "image",
-    "Input image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, PGM/PPM/PBM/PAM, TGA, QOI; HEIF with "
-    "the heif extra, DICOM with the dicom extra).",
+    "Input image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, PGM/PPM/PBM/PAM, PFM, Radiance HDR, "
+    "TGA, QOI, ICO; HEIF with the heif extra, DICOM with the dicom extra).",
 )
 
 
@@ -902,19 +911,35 @@ _IMG = Input(
 class InfoOptions(Options):
     """Options of ``imageform info``."""
 
+    frame: int | None = option(
+        None,
+        help="Describe this image of a file holding several (a TIFF stack's page, z-plane, time "
+        "point or channel; a GIF's or WebP's frame), 0 the first; without it they are listed.",
+        metavar="N",
+    )
+
+    def check(self) -> None:
+        """Refuse a negative ``--frame`` in one line."""
+        super().check()
+        if self.frame is not None and (isinstance(self.frame, bool) or self.frame < 0):
+            raise InvalidInputError(f"expected --frame >= 0, got {self.frame!r}")
+
 
 def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
     """``imageform info``: what an image file holds, from its header, and its colour space."""
-    from imageform.io import exif_camera, image_color_space, image_info
+    from imageform.io import exif_camera, image_color_space, image_frames, image_info
     from imageform.workflows._characterize_inputs import _RAW_SUFFIXES
 
     if Path(image).suffix.lower() in _RAW_SUFFIXES:
         from imageform.workflows.raw import raw_info
 
         return raw_info(image)
-    head = image_info(image) if not _is_dicom(image) else None
-    if head is None:
+    if _is_dicom(image):
         return _dicom_info(image)
+    frames = image_frames(image)
+    if frames.total > 1 and opts.frame is None:
+        return _frames_info(image, frames)
+    head = image_info(image, frame=opts.frame)
     declared = image_color_space(image)
     orientation = _exif_orientation(image, head.format)
     turned = orientation in (5, 6, 7, 8)  # stored on its side
@@ -933,6 +958,8 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
         "color_space_source": declared.source,
         "description": declared.description or None,
         "exif_orientation": orientation,
+        "frames": frames.total,
+        "frame": opts.frame,
     }
     space = declared.name or "not declared (read as sRGB)"
     if declared.name is None and declared.source == "icc":
@@ -945,9 +972,10 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
         "none": "",
         "tiff-description": " (recorded by imageform in the TIFF's description)",
     }.get(declared.source, f" ({declared.source})")
+    which = f" (frame {opts.frame} of {frames.total})" if frames.total > 1 else ""
     text = [
-        f"{image}: {head.format}, {head.width} x {head.height} px, {head.channels} channel(s), "
-        f"{head.dtype}",
+        f"{image}{which}: {head.format}, {head.width} x {head.height} px, {head.channels} "
+        f"channel(s), {head.dtype}",
         f"colour space: {space}{how}",
     ]
     if orientation not in (None, 1):
@@ -962,6 +990,50 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
             f"focal length ~ {cam.focal_length_px:.0f} px (from the EXIF's "
             f"{cam.focal_length_px_source}; an estimate, no calibration)"
         )
+    return Result(summary, tuple(text))
+
+
+def _frames_info(image: Path, frames: Any) -> Result:
+    """``imageform info`` of a file of several images: what they are, and how to read one.
+
+    The images are listed by their axes (a TIFF stack's pages, z-planes, time points,
+    channels; a GIF's frames), with the size of each (the first's: a stack's images are alike).
+    """
+    from imageform.io import image_color_space, image_info
+
+    head = image_info(image, frame=0)
+    declared = image_color_space(image)
+    what = " x ".join(f"{n} {w}" for w, n in frames.axes)
+    summary = {
+        "image": image,
+        "format": head.format,
+        "width": head.width,
+        "height": head.height,
+        "channels": head.channels,
+        "dtype": head.dtype,
+        "megapixels": round(head.width * head.height / 1e6, 3),
+        "color_space": declared.name,
+        "color_space_source": declared.source,
+        "description": declared.description or None,
+        "frames": frames.total,
+        "frame_axes": dict(frames.axes),
+    }
+    last = frames.total - 1
+    text = [
+        f"{image}: {head.format}, {frames.total} images ({what}), each {head.width} x "
+        f"{head.height} px, {head.channels} channel(s), {head.dtype}",
+        f"frames 0 to {last}, in the file's order; read one: imageform info/convert --frame N, "
+        "read_image(path, frame=N)",
+    ]
+    if len(frames.axes) > 1:  # frame N = 2 x (time point) + (z-plane), each from 0
+        sizes = [n for _, n in frames.axes]
+        steps = [math.prod(sizes[i + 1 :]) for i in range(len(sizes))]
+        terms = [
+            (f"{s} x " if s > 1 else "") + f"({w.removesuffix('s')})"
+            for (w, _), s in zip(frames.axes, steps, strict=True)
+        ]
+        text.append(f"frame N = {' + '.join(terms)}, each counted from 0")
+    text.append(f"colour space: {declared.name or 'not declared (read as sRGB)'}")
     return Result(summary, tuple(text))
 
 
@@ -1082,8 +1154,8 @@ WORKFLOWS = (
         (
             Input(
                 "image",
-                "Image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, PGM/PPM, TGA, QOI, HEIF, DICOM) "
-                "or raw file (DNG, CR2 ...).",
+                "Image (PNG, JPEG, TIFF, .npy, WebP, BMP, GIF, PGM/PPM, PFM, HDR, TGA, QOI, ICO, "
+                "HEIF, DICOM) or raw file (DNG, CR2 ...).",
             ),
         ),
         None,
