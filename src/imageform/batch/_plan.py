@@ -299,9 +299,12 @@ def plan_jobs(
         pattern = os.path.join(pattern, "*")  # a folder: its files
     fallback = None
     if writes is not None:
-        kinds = [str(w).lower() for w in writes]
+        ok = isinstance(writes, (list, tuple)) and all(isinstance(w, str) for w in writes)
+        kinds = [w.lower() for w in writes] if ok else []
         if not kinds or not all(k.startswith(".") and len(k) > 1 for k in kinds):
-            raise InvalidInputError(f"expected writes as file suffixes, got {describe(writes)}")
+            raise InvalidInputError(
+                f"expected writes as file suffixes such as ('.png', '.tif'), got {describe(writes)}"
+            )
         fallback = kinds[0]
     base = Path(os.path.abspath(glob_base(pattern)))
     inputs = sorted(Path(os.path.abspath(p)) for p in glob_paths(pattern) if os.path.isfile(p))
