@@ -164,6 +164,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "vp-real": "benchmarks/check_vp_real.py",
     "vp-seed": "benchmarks/check_vp_seed.py",
     "wsi": "benchmarks/bench_wsi.py",
+    "wsi-real": "benchmarks/check_wsi_real.py",
 }
 
 #: ``NAME-YYYY-MM-DD.md``, or with a letter after the date for a later table of the same day

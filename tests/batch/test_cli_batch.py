@@ -220,7 +220,7 @@ def test_bad_input_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str
         (
             ["chunked", "convert", str(tmp_path / "in" / "a.png"), "-o", str(tmp_path / "o.tif")],
             1,
-            "expected a tiled .tif/.tiff or a .zarr",
+            "expected a TIFF (.tif, .tiff, or a slide scanner",
         ),
         (
             [

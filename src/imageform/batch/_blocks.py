@@ -15,7 +15,7 @@ import numpy as np
 
 from imageform._validate import check_option
 from imageform.batch._lazy import _TiffMeta
-from imageform.errors import InvalidInputError
+from imageform.errors import InvalidInputError, UnreadableFileError
 from imageform.workflows.color import CHUNKED_CHOICES
 
 #: The white-balance methods (of :data:`imageform.color.WHITE_BALANCE_METHODS`, the one
@@ -142,8 +142,15 @@ def _stain_stats(
         k = small[0] if small else len(levels) - 1
         h, w = levels[k]
         step = max(1, int(np.ceil(np.sqrt(h * w / budget))))
-        with tifffile.TiffFile(src) as tf:
-            level = tf.series[0].levels[k].asarray()
+        try:
+            with tifffile.TiffFile(src) as tf:
+                level = tf.series[0].levels[k].asarray()
+        except MemoryError:
+            raise
+        except Exception as exc:  # a damaged tile: the codec's own error, in one line
+            text = str(exc).strip().splitlines()
+            why = f"{type(exc).__name__}: {text[0][:100]}" if text else type(exc).__name__
+            raise UnreadableFileError(src, f"pyramid level {k} cannot be decoded ({why})") from None
         where = f"pyramid level {k} ({w} x {h})" + (f", every {step}th pixel" if step > 1 else "")
         return stats_t, own(level[::step, ::step], levels[0][1] / w * step), where
     h, w = int(x.shape[0]), int(x.shape[1])

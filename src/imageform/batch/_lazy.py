@@ -24,13 +24,21 @@ if TYPE_CHECKING:
 __all__ = ["open_lazy"]
 
 
-def _kind(path: Path) -> str:
+def _kind(path: Path, output: bool = False) -> str:
+    """Return "tiff" or "zarr" for ``path``; an input may be a slide scanner's TIFF (.svs ...)."""
+    from imageform.io import IMAGE_FORMATS
+
     suffix = path.suffix.lower()
-    if suffix in (".tif", ".tiff"):
+    if suffix in (".tif", ".tiff") or (not output and IMAGE_FORMATS.get(suffix) == "tiff"):
         return "tiff"
     if suffix == ".zarr":
         return "zarr"
-    raise InvalidInputError(f"expected a tiled .tif/.tiff or a .zarr array, got {path}")
+    if output:
+        raise InvalidInputError(f"expected a tiled .tif/.tiff or a .zarr output, got {path}")
+    raise InvalidInputError(
+        f"expected a TIFF (.tif, .tiff, or a slide scanner's .svs, .ndpi, .scn, .bif, .qptiff) "
+        f"or a .zarr array, got {path}"
+    )
 
 
 class _ContiguousRows:
@@ -73,6 +81,45 @@ class _ContiguousRows:
         return out[(slice(None, None, rstep), slice(None, None, cstep), *key[2:])]
 
 
+def _decoded(z: Any, key: tuple[slice, slice], path: Path) -> np.ndarray:
+    """Return ``z[key]`` decoded, or refuse the file in one line when a tile cannot be.
+
+    A damaged tile (OpenSlide's ``unreadable.svs``: a JPEG's bogus marker length) raised the
+    codec's own error (imagecodecs' Jpeg8Error) out of the block computation, an
+    "unexpected" error; the file is named, with the rows and columns of the tile.
+    """
+    try:
+        return np.asarray(z[key])
+    except (ImageformError, MemoryError):
+        raise
+    except Exception as exc:
+        text = str(exc).strip().splitlines()
+        why = f"{type(exc).__name__}: {text[0][:100]}" if text else type(exc).__name__
+        rows, cols = key
+        raise UnreadableFileError(
+            path,
+            f"rows {rows.start}-{rows.stop}, columns {cols.start}-{cols.stop} cannot be "
+            f"decoded ({why})",
+        ) from None
+
+
+class _Guarded:
+    """A Zarr array whose blocks are decoded through :func:`_decoded` (one-line refusals)."""
+
+    def __init__(self, z: Any, path: Path) -> None:
+        self.z, self.shape, self.dtype, self.ndim = z, tuple(z.shape), np.dtype(z.dtype), z.ndim
+        self.path = path
+
+    def __getitem__(self, key: Any) -> np.ndarray:
+        if not isinstance(key, tuple):
+            key = (key,)
+        key = key + (slice(None),) * (self.ndim - len(key))
+        r0, r1, _ = key[0].indices(self.shape[0])
+        c0, c1, _ = key[1].indices(self.shape[1])
+        a = _decoded(self.z, (slice(r0, r1), slice(c0, c1)), self.path)
+        return a[(slice(None, None, key[0].step), slice(None, None, key[1].step), *key[2:])]
+
+
 class _DecodedOnce:
     """Blocks of a Zarr array whose chunks (TIFF tiles or strips) are larger than the blocks.
 
@@ -83,11 +130,12 @@ class _DecodedOnce:
     stays bounded by a band of the image, and a chunk is decoded once when blocks go row by row.
     """
 
-    def __init__(self, z: Any, chunk: int) -> None:
+    def __init__(self, z: Any, chunk: int, path: Path = Path("input")) -> None:
         import threading
         from collections import OrderedDict
 
         self.z, self.shape, self.dtype, self.ndim = z, tuple(z.shape), np.dtype(z.dtype), z.ndim
+        self.path = path
         self.cell = (int(z.chunks[0]), int(z.chunks[1]))
         across = -(-self.shape[1] // self.cell[1])
         self.capacity = (-(-chunk // self.cell[0]) + 1) * across
@@ -110,7 +158,9 @@ class _DecodedOnce:
                 if key in self._cells:
                     return self._cells[key]
             ch, cw = self.cell
-            a = np.asarray(self.z[i * ch : (i + 1) * ch, j * cw : (j + 1) * cw])
+            a = _decoded(
+                self.z, (slice(i * ch, (i + 1) * ch), slice(j * cw, (j + 1) * cw)), self.path
+            )
             with self._lock:
                 self.decodes += 1
                 self._cells[key] = a
@@ -174,14 +224,18 @@ def _refuse_undecodable(p: Path, page: Any) -> None:
         raise UnreadableFileError(p, f"its compression {name} has no decoder here")
 
 
-def _tiff_lazy(p: Path, chunk: int, da: Any, zarr: Any, opened: list[Any] | None) -> Any:
+def _tiff_lazy(
+    p: Path, chunk: int, da: Any, zarr: Any, opened: list[Any] | None, pyramid: bool = False
+) -> Any:
+    """Level 0 (or, ``pyramid``, the group of levels) of a TIFF's first series, lazily."""
     import tifffile
 
     with tifffile.TiffFile(p) as tf:
         page = tf.pages[0]
         _refuse_undecodable(p, page)
         strips = (
-            isinstance(page, tifffile.TiffPage)
+            not pyramid
+            and isinstance(page, tifffile.TiffPage)
             and not page.is_tiled
             and page.compression == 1
             and page.planarconfig == 1
@@ -290,7 +344,7 @@ def _tiff_meta(p: Path) -> _TiffMeta:
             res = (xr[0] / xr[1], yr[0] / yr[1]) if xr[1] and yr[1] else None
         unit = int(tags["ResolutionUnit"].value) if "ResolutionUnit" in tags else None
         desc = page.description or None
-        microns = pixel_size_um(p) if desc else None  # OME PhysicalSize or Aperio MPP
+        microns = pixel_size_um(p)  # OME, Aperio, Philips, Ventana, NDPI ... (as OpenSlide)
         if desc is not None and (
             page.is_shaped or tf.is_ome or tf.is_svs or desc.lstrip()[:1] in ("{", "<")
         ):
@@ -325,18 +379,37 @@ def _chunk_size(chunk: object) -> int:
     return as_int(chunk, "chunk", minimum=1, maximum=_MAX_CHUNK)
 
 
-def open_lazy(path: str | Path, chunk: int = 1024) -> dask.array.Array:
-    """Open a TIFF or a Zarr array as a dask array of ``chunk x chunk`` blocks.
+def open_lazy(path: str | Path, chunk: int = 1024, *, level: int = 0) -> dask.array.Array:
+    r"""Open a TIFF or a Zarr array as a dask array of ``chunk x chunk`` blocks.
 
     Nothing is read until the array is computed. A tiled (or compressed strip) TIFF is read
     through tifffile's Zarr store, tile by tile (strip by strip: a compressed strip is
     decoded whole); an uncompressed strip TIFF (one strip or many) row band by row band from
     the file. Blocks have all channels (choose a multiple of the TIFF's tile size).
+
+    ``level`` is the pyramid level of a whole-slide TIFF (0 the full resolution, 1 the first
+    reduced one; -1 the smallest, as a Python index), a slide scanner's own (.svs, .ndpi
+    ...) or OME's; a level other than 0 of a flat image is refused. A tissue mask at a
+    reduced level, whose pixels are :math:`s = w_0 / w_k` times larger:
+
+    .. math:: m_k = \operatorname{tissue\_mask}(L_k,\ p_k = s\, p_0)
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, tifffile
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "slide.tif"
+    >>> with tifffile.TiffWriter(p) as tw:
+    ...     tw.write(np.zeros((512, 512, 3), np.uint8), tile=(256, 256), subifds=1)
+    ...     tw.write(np.zeros((256, 256, 3), np.uint8), tile=(256, 256), subfiletype=1)
+    >>> open_lazy(p, level=-1).shape
+    (256, 256, 3)
     """
-    return _open_lazy(path, chunk, None)
+    from imageform._validate import as_int
+
+    return _open_lazy(path, chunk, None, as_int(level, "level", minimum=-64, maximum=64))
 
 
-def _open_lazy(path: str | Path, chunk: int, opened: list[Any] | None) -> Any:
+def _open_lazy(path: str | Path, chunk: int, opened: list[Any] | None, level: int = 0) -> Any:
     """:func:`open_lazy`; the TIFF stores it opens are appended to ``opened`` (if given)."""
     from imageform._optional import require
     from imageform._validate import as_path
@@ -349,7 +422,7 @@ def _open_lazy(path: str | Path, chunk: int, opened: list[Any] | None) -> Any:
         raise InvalidInputError(f"input {p} does not exist")
     try:
         if _kind(p) == "tiff":
-            z: Any = _tiff_lazy(p, chunk, da, zarr, opened)
+            z: Any = _tiff_lazy(p, chunk, da, zarr, opened, pyramid=level != 0)
             if not isinstance(z, (zarr.Array, zarr.Group)):
                 return z  # an uncompressed strip TIFF, already a dask array
         else:
@@ -360,17 +433,35 @@ def _open_lazy(path: str | Path, chunk: int, opened: list[Any] | None) -> Any:
         text = str(exc).strip().splitlines()
         reason = text[0][:120] if text else type(exc).__name__
         raise UnreadableFileError(p, reason) from exc
+    keys = (
+        sorted((k for k in z.array_keys() if k.isdigit()), key=int)
+        if isinstance(z, zarr.Group)
+        else []
+    )
+    count = len(keys) if keys else 1
+    if not -count <= level < count:
+        raise InvalidInputError(
+            f"{p} has {count} pyramid level(s) (0 to {count - 1}, or -1 the smallest), got "
+            f"level {level}"
+        )
     if isinstance(z, zarr.Group):  # a pyramid: level 0 is the full resolution
-        z = z["0"]
+        z = z[keys[level]]
     if z.ndim != 3 or z.shape[-1] != 3:
         raise InvalidInputError(f"{p}: expected an RGB image (H, W, 3), got shape {z.shape}")
     if z.chunks[0] > chunk or z.chunks[1] > chunk:  # tiles or strips larger than a block
         st = p.stat()
         return da.from_array(
-            _DecodedOnce(z, chunk),
+            _DecodedOnce(z, chunk, p),
             chunks=(chunk, chunk, z.shape[-1]),
             name=f"imageform-decoded-once-{p}-{st.st_size}-{st.st_mtime_ns}-{chunk}",
             asarray=False,
             fancy=False,
         )
-    return da.from_zarr(z, chunks=(chunk, chunk, z.shape[-1]))
+    st = p.stat()
+    return da.from_array(
+        _Guarded(z, p),
+        chunks=(chunk, chunk, z.shape[-1]),
+        name=f"imageform-tiles-{p}-{st.st_size}-{st.st_mtime_ns}-{level}-{chunk}",
+        asarray=False,
+        fancy=False,
+    )

@@ -307,7 +307,7 @@ def process_chunked(
     src_p, dst_p = as_path(src, "src"), as_path(dst, "dst")
     cmd = check_option(command, CHUNKED_COMMANDS, "chunked command")
     opts = _options(cmd, options)
-    out_kind = _kind(dst_p)
+    out_kind = _kind(dst_p, output=True)
     chunk = _chunk_size(chunk)
     pyramid = check_option(pyramid, PYRAMID_MODES, "pyramid")
     stats_from = check_option(stats_from, STATS_SOURCES, "stats_from")

@@ -133,6 +133,16 @@ IMAGE_FORMATS = MappingProxyType(
         ".jpeg": "jpeg",
         ".tif": "tiff",
         ".tiff": "tiff",
+        # slide scanners' TIFFs (read only): Aperio, Hamamatsu, Leica, Ventana, PerkinElmer
+        # (Akoya) QPTIFF, BigTIFF's own suffixes
+        ".svs": "tiff",
+        ".ndpi": "tiff",
+        ".scn": "tiff",
+        ".bif": "tiff",
+        ".qptiff": "tiff",
+        ".btf": "tiff",
+        ".tf8": "tiff",
+        ".tf2": "tiff",
         ".npy": "npy",
         ".heic": "heif",
         ".heif": "heif",
@@ -157,6 +167,8 @@ IMAGE_FORMATS = MappingProxyType(
 
 #: The formats :func:`write_image` writes (the others of IMAGE_FORMATS are read only).
 _WRITTEN = ("png", "jpeg", "tiff", "npy", "netpbm", "pfm")
+#: TIFF suffixes read, not written (a scanner's layout and metadata: imageform writes .tif).
+_READ_ONLY_TIFF = (".svs", ".ndpi", ".scn", ".bif", ".qptiff", ".btf", ".tf8", ".tf2")
 #: The Netpbm suffixes written: a binary PGM (grey) or PPM (RGB), 8 or 16 bits.
 _NETPBM_WRITTEN = {".pgm": 1, ".ppm": 3}
 
@@ -255,7 +267,9 @@ def image_format(path: str | Path) -> str:
         written = ", ".join(
             s
             for s, f in IMAGE_FORMATS.items()
-            if f in _WRITTEN and (f != "netpbm" or s in _NETPBM_WRITTEN)
+            if f in _WRITTEN
+            and (f != "netpbm" or s in _NETPBM_WRITTEN)
+            and s not in _READ_ONLY_TIFF
         )
         shown = shorten(p)
         raise InvalidInputError(
@@ -529,13 +543,23 @@ def image_frames(path: str | Path) -> ImageFrames:
 
 
 def pixel_size_um(path: str | Path) -> tuple[float, float] | None:
-    r"""Return the pixel size in micrometres (x, y) a microscopy TIFF states, or None.
+    r"""Return the pixel size in micrometres (x, y) a microscopy file states, or None.
 
-    A slide scanner's TIFF states it in its description: OME-XML ``PhysicalSizeX`` /
-    ``PhysicalSizeY`` in µm (Bio-Formats, QuPath's exports), or an Aperio SVS header's
-    ``MPP = ...`` (the same tags :mod:`imageform.batch` reads for its pyramids). The TIFF
-    resolution tags alone are not read: photo software writes 72 dpi to any file. Other
-    formats: None.
+    As OpenSlide reads it (its ``openslide.mpp-x`` / ``mpp-y``), of the full-resolution
+    level:
+
+    - OME-XML ``PhysicalSizeX`` / ``PhysicalSizeY`` in µm (Bio-Formats, QuPath's exports);
+    - an Aperio SVS header's ``MPP = ...``;
+    - a Philips TIFF's ``DICOM_PIXEL_SPACING`` (mm, rows then columns: the first of its
+      pixel data representation sequence, the full resolution);
+    - a Ventana BIF's ``ScanRes`` in its XMP ``iScan`` element (µm);
+    - an ImageJ TIFF's resolution with ``unit=micron`` (or µm, um) in its description;
+    - else the TIFF resolution tags in pixels per centimetre (Hamamatsu NDPI, QPTIFF,
+      libvips, tifffile and imageform's own pyramids) when they give under 100 µm: photo
+      software writes 72 dpi (353 µm) to any file, and in inches (never read);
+    - a DICOM slide-microscopy image's Pixel Spacing (mm, modality SM).
+
+    Other formats: None.
 
     Raises
     ------
@@ -551,27 +575,106 @@ def pixel_size_um(path: str | Path) -> tuple[float, float] | None:
     >>> pixel_size_um(p)
     (0.25, 0.25)
     """
-    import re
-
     p = _existing(path)
-    if _content_format(p, "") != "tiff":
+    fmt = _content_format(p, "")
+    if fmt == "dicom":
+        return _dicom_pixel_size(p)
+    if fmt != "tiff":
         return None
     tifffile = _tifffile()
     try:
         with tifffile.TiffFile(p) as tif:
-            desc = tif.pages[0].description or ""
+            page = tif.pages[0]
+            desc = page.description or ""
+            xmp = page.tags.get(700)
+            xmp_text = _tag_text(xmp.value) if xmp is not None else ""
+            res = _resolution(page)
     except Exception:
         return None
-    if "Aperio" in desc[:200]:
-        m = re.search(r"\bMPP\s*=\s*([0-9.eE+-]+)", desc)
-        return (float(m.group(1)),) * 2 if m else None
-    xs = re.search(r'PhysicalSizeX="([0-9.eE+-]+)"', desc)
-    ys = re.search(r'PhysicalSizeY="([0-9.eE+-]+)"', desc)
-    units = re.findall(r'PhysicalSize[XY]Unit="([^"]*)"', desc)
-    if not xs or any(u not in ("µm", "um", "\u00b5m") for u in units):
+    return _stated_microns(desc, xmp_text, res)
+
+
+def _tag_text(value: Any) -> str:
+    """Return a tag's value as text (XMP is bytes)."""
+    if isinstance(value, (bytes, bytearray)):
+        return bytes(value).decode("utf-8", "replace")
+    return str(value)
+
+
+def _resolution(page: Any) -> tuple[float, float, int] | None:
+    """Return a TIFF page's resolution (pixels per unit, x and y) and unit, or None."""
+    tags = page.tags
+    if "XResolution" not in tags or "YResolution" not in tags:
         return None
-    x = float(xs.group(1))
-    return x, float(ys.group(1)) if ys else x
+    xr, yr = tags["XResolution"].value, tags["YResolution"].value
+    if not (xr[0] and xr[1] and yr[0] and yr[1]):
+        return None
+    unit = int(tags["ResolutionUnit"].value) if "ResolutionUnit" in tags else 2
+    return xr[0] / xr[1], yr[0] / yr[1], unit
+
+
+#: The largest pixel a resolution tag in centimetres is read as (µm): microscopes and slide
+#: scanners image at 0.1-50 µm; 72 dpi (photo software's default) is 353 µm.
+_MAX_TAG_MICRONS = 100.0
+
+
+def _stated_microns(
+    desc: str, xmp: str, res: tuple[float, float, int] | None
+) -> tuple[float, float] | None:
+    """Return the pixel size (x, y) in µm a TIFF's description, XMP or resolution tags state."""
+    import re
+
+    number = r"([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)"
+    if "Aperio" in desc[:200]:
+        m = re.search(r"\bMPP\s*=\s*" + number, desc)
+        return (float(m.group(1)),) * 2 if m else None
+    xs = re.search(r'PhysicalSizeX="' + number + '"', desc)
+    if xs:
+        ys = re.search(r'PhysicalSizeY="' + number + '"', desc)
+        units = re.findall(r'PhysicalSize[XY]Unit="([^"]*)"', desc)
+        if any(u not in ("µm", "um", "\u00b5m", "\u03bcm") for u in units):
+            return None
+        x = float(xs.group(1))
+        return x, float(ys.group(1)) if ys else x
+    if "DPUfsImport" in desc[:2000]:  # Philips: DICOM_PIXEL_SPACING "row" "column" in mm
+        q = r'\s*(?:&quot;|")'
+        found = list(
+            re.finditer(r'Name="DICOM_PIXEL_SPACING"[^>]*>' + q + number + q + q + number, desc)
+        )
+        seq = desc.find("PIIM_PIXEL_DATA_REPRESENTATION_SEQUENCE")
+        inside = [m for m in found if seq >= 0 and m.start() > seq]  # the full resolution's
+        if not found:
+            return None
+        first = (inside or found)[0]
+        return float(first.group(2)) * 1000.0, float(first.group(1)) * 1000.0
+    if "<iScan" in xmp:  # Ventana BIF
+        m = re.search(r'ScanRes="' + number + '"', xmp)
+        return (float(m.group(1)),) * 2 if m else None
+    if desc.startswith("ImageJ=") and res is not None:
+        m = re.search(r"^unit=(.*)$", desc, re.MULTILINE)
+        unit = m.group(1).strip().replace("\\u00B5", "µ") if m else ""
+        if unit in ("micron", "microns", "um", "µm", "\u03bcm"):
+            return 1.0 / res[0], 1.0 / res[1]
+        return None
+    if res is not None and res[2] == 3:  # pixels per centimetre
+        x, y = 1e4 / res[0], 1e4 / res[1]
+        if x < _MAX_TAG_MICRONS and y < _MAX_TAG_MICRONS:
+            return x, y
+    return None
+
+
+def _dicom_pixel_size(p: Path) -> tuple[float, float] | None:
+    """Return a DICOM slide-microscopy image's pixel size in µm (x, y), or None."""
+    from imageform.io.dicom import dicom_info
+
+    try:
+        d = dicom_info(p)
+    except Exception:
+        return None
+    if d.modality != "SM" or d.pixel_spacing_mm is None:
+        return None
+    rows, cols = d.pixel_spacing_mm  # between rows (y), between columns (x)
+    return float(cols) * 1000.0, float(rows) * 1000.0
 
 
 def image_info(path: str | Path, *, frame: int | None = None) -> ImageInfo:
@@ -1673,6 +1776,11 @@ def write_image(
     p = check_writable(path, "path")
     shown = p.with_name(final_name(p.name))  # the user's name in messages, not a temporary's
     fmt = image_format(p)
+    if p.suffix.lower() in _READ_ONLY_TIFF:
+        raise InvalidInputError(
+            f"imageform reads {p.suffix.lower()} slides but writes TIFF as .tif or .tiff, got "
+            f"{shown}"
+        )
     out_of_range = check_option(out_of_range, _OUT_OF_RANGE, "out-of-range policy")
     profile, recorded = None, None
     if color_space is not None:

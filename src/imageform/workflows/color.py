@@ -981,6 +981,10 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
     if orientation not in (None, 1):
         how_stored = f"stored {stored[0]} x {stored[1]} px; " if turned else ""
         text.append(f"EXIF orientation {orientation}: {how_stored}read_image turns it upright")
+    if head.format == "tiff":
+        slide = _tiff_slide(image)
+        summary.update(slide)
+        text += _slide_lines(slide)
     cam = exif_camera(image)
     summary["exif_camera"] = _exif_summary(cam)
     if cam.found:
@@ -1035,6 +1039,55 @@ def _frames_info(image: Path, frames: Any) -> Result:
         text.append(f"frame N = {' + '.join(terms)}, each counted from 0")
     text.append(f"colour space: {declared.name or 'not declared (read as sRGB)'}")
     return Result(summary, tuple(text))
+#: tifffile's flags of a slide scanner's TIFF, and the format's name (OpenSlide's vendor names).
+_SLIDE_VENDORS = (("is_svs", "aperio"), ("is_ndpi", "hamamatsu"), ("is_philips", "philips"),
+                  ("is_bif", "ventana"), ("is_scn", "leica"), ("is_qpi", "qptiff"),
+                  ("is_ome", "ome"))  # fmt: skip
+
+
+def _tiff_slide(image: Path) -> dict[str, Any]:
+    """Return a TIFF's pyramid levels ((width, height), level 0 first), pixel size, scanner.
+
+    ``vendor`` is the scanner format tifffile recognises (OpenSlide's names), ``generic-tiff``
+    for another pyramid, None for a flat TIFF.
+    """
+    import tifffile
+
+    from imageform.io import pixel_size_um
+
+    levels: list[list[int]] = []
+    vendor = None
+    try:
+        with tifffile.TiffFile(image) as tif:
+            series = tif.series[0]
+            for level in series.levels:
+                axes = series.axes
+                shape = dict(zip(axes, level.shape, strict=False))
+                levels.append([int(shape.get("X", 0)), int(shape.get("Y", 0))])
+            vendor = next((name for flag, name in _SLIDE_VENDORS if getattr(tif, flag)), None)
+    except Exception:  # the header was read: a damaged level table says nothing more
+        levels = []
+    if vendor is None and len(levels) > 1:
+        vendor = "generic-tiff"
+    um = pixel_size_um(image)
+    return {
+        "levels": levels or None,
+        "pixel_size_um": None if um is None else [round(float(v), 6) for v in um],
+        "vendor": vendor,
+    }
+
+
+def _slide_lines(slide: dict[str, Any]) -> list[str]:
+    """``imageform info``'s lines on a slide: its format, levels and pixel size."""
+    out = []
+    levels = slide.get("levels") or []
+    if slide.get("vendor") or len(levels) > 1:
+        sizes = ", ".join(f"{w} x {h}" for w, h in levels)
+        out.append(f"slide: {slide.get('vendor') or 'tiff'}, {len(levels)} level(s): {sizes}")
+    um = slide.get("pixel_size_um")
+    if um is not None:
+        out.append(f"pixel size: {um[0]:g} x {um[1]:g} µm (level 0)")
+    return out
 
 
 def _exif_summary(cam: Any) -> dict[str, Any] | None:
@@ -1103,6 +1156,9 @@ def _dicom_info(image: Path) -> Result:
             )
         else:
             text.append("window: none in the file (--window auto uses the image's range)")
+    slide = _dicom_slide(image, d)
+    summary.update(slide)
+    text += _slide_lines(slide)
     for name, sp in (("pixel spacing", d.pixel_spacing_mm),
                      ("imager pixel spacing", d.imager_pixel_spacing_mm)):  # fmt: skip
         if sp is not None:
@@ -1115,6 +1171,34 @@ def _dicom_info(image: Path) -> Result:
         )
         text.append(f"colour space: {space}")
     return Result(summary, tuple(text))
+
+
+def _dicom_slide(image: Path, d: Any) -> dict[str, Any]:
+    """Return a DICOM slide image's total pixel matrix (its frames are tiles), pixel size.
+
+    Empty for another modality, or a slide image that states no total pixel matrix.
+    """
+    from imageform.io import pixel_size_um
+
+    if d.modality != "SM":
+        return {}
+    import pydicom
+
+    try:
+        ds = pydicom.dcmread(image, stop_before_pixels=True)
+        total = (int(ds.get("TotalPixelMatrixColumns", 0) or 0),
+                 int(ds.get("TotalPixelMatrixRows", 0) or 0))  # fmt: skip
+    except Exception:  # dicom_info read it already; an odd attribute says nothing more
+        total = (0, 0)
+    um = pixel_size_um(image)
+    out: dict[str, Any] = {
+        "vendor": "dicom",
+        "pixel_size_um": None if um is None else [round(float(v), 6) for v in um],
+    }
+    if all(total):
+        out["levels"] = [list(total)]
+        out["tile"] = [d.width, d.height]
+    return out
 
 
 def _exif_orientation(path: Path, fmt: str) -> int | None:
