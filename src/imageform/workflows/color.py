@@ -1039,6 +1039,8 @@ def _frames_info(image: Path, frames: Any) -> Result:
         text.append(f"frame N = {' + '.join(terms)}, each counted from 0")
     text.append(f"colour space: {declared.name or 'not declared (read as sRGB)'}")
     return Result(summary, tuple(text))
+
+
 #: tifffile's flags of a slide scanner's TIFF, and the format's name (OpenSlide's vendor names).
 _SLIDE_VENDORS = (("is_svs", "aperio"), ("is_ndpi", "hamamatsu"), ("is_philips", "philips"),
                   ("is_bif", "ventana"), ("is_scn", "leica"), ("is_qpi", "qptiff"),
