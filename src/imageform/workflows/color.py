@@ -178,15 +178,13 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
         "time points, channels), a multi-frame DICOM's, an animated GIF's or WebP's; 0 the "
         "first (imageform info lists them).",
         metavar="N",
+        minimum=0,
     )
 
     def check(self) -> None:
         """Check the options and normalise the ``--from`` and ``--to`` space names."""
         super().check()
         from imageform.color import space_name
-
-        if self.frame is not None and (isinstance(self.frame, bool) or self.frame < 0):
-            raise InvalidInputError(f"expected --frame >= 0, got {self.frame!r}")
 
         if self.window is not None:
             object.__setattr__(self, "window", _window_option(self.window))
@@ -916,13 +914,8 @@ class InfoOptions(Options):
         help="Describe this image of a file holding several (a TIFF stack's page, z-plane, time "
         "point or channel; a GIF's or WebP's frame), 0 the first; without it they are listed.",
         metavar="N",
+        minimum=0,
     )
-
-    def check(self) -> None:
-        """Refuse a negative ``--frame`` in one line."""
-        super().check()
-        if self.frame is not None and (isinstance(self.frame, bool) or self.frame < 0):
-            raise InvalidInputError(f"expected --frame >= 0, got {self.frame!r}")
 
 
 def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
