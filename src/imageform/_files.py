@@ -40,6 +40,7 @@ from types import TracebackType
 from imageform.errors import ImageformError, InvalidInputError
 
 __all__ = [
+    "RAW_SUFFIXES",
     "OutputWriteError",
     "Outputs",
     "atomic_write",
@@ -54,6 +55,14 @@ __all__ = [
     "same_file",
     "signals_deferred",
 ]
+
+#: Suffixes of camera raw files (any case): DNG and the makers' formats LibRaw reads
+#: (:data:`imageform.io.RAW_SUFFIXES`; here, free of NumPy, for the command line's lazy imports).
+RAW_SUFFIXES: tuple[str, ...] = (
+    ".dng", ".cr2", ".cr3", ".crw", ".nef", ".nrw", ".arw", ".sr2", ".srf", ".raf", ".orf",
+    ".rw2", ".rwl", ".raw", ".pef", ".srw", ".3fr", ".fff", ".iiq", ".mos", ".mef", ".mrw",
+    ".x3f", ".erf", ".kdc", ".dcr", ".k25", ".gpr",
+)  # fmt: skip
 
 _PART = ".part"
 _PART_NAME = re.compile(r"^\.(.+)\.\d+-[0-9a-z]+(?:\.old)?\.part")

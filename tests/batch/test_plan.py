@@ -49,6 +49,17 @@ def test_plan_takes_a_folder_and_a_kind_the_command_writes(tmp_path: Path) -> No
     assert [j.output.name for j in plan_jobs(f"{tmp_path}/in/r.dng", tmp_path / "o")] == ["r.dng"]
     with pytest.raises(InvalidInputError, match="expected writes as file suffixes"):
         plan_jobs(str(tmp_path / "in"), tmp_path / "out", writes=("png",))
+    # reads: a folder's other files are not inputs (a glob's are: it named them)
+    (tmp_path / "in" / "notes.txt").write_text("x")
+    jobs = plan_jobs(str(tmp_path / "in"), tmp_path / "out", reads=(".PNG", ".dng"))
+    assert sorted(j.input.name for j in jobs) == ["r.dng", "x.png"]
+    jobs = plan_jobs(str(tmp_path / "in"), tmp_path / "out", reads=(".dng",), writes=(".png",))
+    assert [j.output.name for j in jobs] == ["r.png"]
+    assert len(plan_jobs(f"{tmp_path}/in/*", tmp_path / "out", reads=(".png",))) == 3
+    with pytest.raises(InvalidInputError, match=r"no file of the kinds read \(\.cr2\) in"):
+        plan_jobs(str(tmp_path / "in"), tmp_path / "out", reads=(".cr2",))
+    with pytest.raises(InvalidInputError, match="expected reads as file suffixes"):
+        plan_jobs(str(tmp_path / "in"), tmp_path / "out", reads=".png")
     (tmp_path / "in" / "x.dng").write_bytes(b"")  # x.png and x.dng would both write x.png
     with pytest.raises(InvalidInputError, match="would both write"):
         plan_jobs(str(tmp_path / "in"), tmp_path / "out", writes=(".png",))
@@ -179,7 +190,8 @@ def test_runner_exports_the_plan_names_from_one_list() -> None:
 
 def test_batch_develop_takes_a_folder_of_raw_files(tmp_path: Path) -> None:
     """``imageform batch develop FOLDER -o OUT``: the folder's raw files are developed to .png
-    (a raw suffix is one develop does not write), which the next command reads."""
+    (a raw suffix is one develop does not write), which the next command reads; the folder's
+    other files (a PNG, notes) are not develop's inputs."""
     from imageform.io import write_dng
 
     rng = np.random.default_rng(3)
@@ -187,6 +199,8 @@ def test_batch_develop_takes_a_folder_of_raw_files(tmp_path: Path) -> None:
     (tmp_path / "raw").mkdir()
     mosaic = rng.integers(200, 3000, size=(128, 192)).astype(np.uint16)
     write_dng(tmp_path / "raw" / "a.dng", mosaic, black_level=64, white_level=4095, color_matrix=cm)
+    (tmp_path / "raw" / "notes.txt").write_text("shot on a Tuesday")
+    write_image(tmp_path / "raw" / "preview.png", np.zeros((4, 4, 3), np.uint8))
     report = run_batch("develop", str(tmp_path / "raw"), tmp_path / "out", {}, n_workers=1)
     assert report.ok, report
     (out,) = sorted((tmp_path / "out").glob("*.png"))

@@ -246,6 +246,7 @@ def plan_jobs(
     *,
     out_suffix: str | None = None,
     writes: Sequence[str] | None = None,
+    reads: Sequence[str] | None = None,
 ) -> list[Job]:
     """Return the jobs for the files matching ``pattern``, outputs under ``out_dir``.
 
@@ -253,7 +254,8 @@ def plan_jobs(
     ----------
     pattern : str
         A glob; ``**`` matches any number of folders. Hidden files are not matched. An
-        existing folder stands for its files (``folder/*``).
+        existing folder stands for its files (``folder/*``), those of the ``reads`` suffixes
+        where given (a folder's notes or other kinds of file are not the command's inputs).
     out_dir : path
         Outputs go to ``out_dir / (input relative to the glob's fixed prefix)``.
     out_suffix : str, optional
@@ -261,6 +263,9 @@ def plan_jobs(
     writes : sequence of str, optional
         The suffixes the command writes (``".png"``, ...): without ``out_suffix``, an input
         of another suffix (a raw file, a WebP) gets the first of them.
+    reads : sequence of str, optional
+        The suffixes the command reads, any case (``imageform.io.IMAGE_FORMATS``' or
+        ``imageform.io.RAW_SUFFIXES``): a folder's other files are left out.
 
     Returns
     -------
@@ -295,8 +300,17 @@ def plan_jobs(
             )
         if not out_suffix.startswith("."):
             out_suffix = "." + out_suffix
-    if os.path.isdir(pattern) and not any(c in pattern for c in "*?["):
+    folder = os.path.isdir(pattern) and not any(c in pattern for c in "*?[")
+    if folder:
         pattern = os.path.join(pattern, "*")  # a folder: its files
+    keep = None
+    if reads is not None:
+        ok = isinstance(reads, (list, tuple)) and all(isinstance(r, str) for r in reads)
+        keep = {r.lower() for r in reads} if ok else set()
+        if not keep or not all(k.startswith(".") and len(k) > 1 for k in keep):
+            raise InvalidInputError(
+                f"expected reads as file suffixes such as ('.png', '.tif'), got {describe(reads)}"
+            )
     fallback = None
     if writes is not None:
         ok = isinstance(writes, (list, tuple)) and all(isinstance(w, str) for w in writes)
@@ -308,6 +322,11 @@ def plan_jobs(
         fallback = kinds[0]
     base = Path(os.path.abspath(glob_base(pattern)))
     inputs = sorted(Path(os.path.abspath(p)) for p in glob_paths(pattern) if os.path.isfile(p))
+    if folder and keep is not None:
+        inputs = [p for p in inputs if p.suffix.lower() in keep]
+        if not inputs:
+            shown = ", ".join(sorted(keep)[:12]) + (", ..." if len(keep) > 12 else "")
+            raise InvalidInputError(f"no file of the kinds read ({shown}) in {pattern[:-2]!r}")
     if not inputs:
         raise InvalidInputError(f"no files match {pattern!r}")
     matcher = glob_regex(pattern)

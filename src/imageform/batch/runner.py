@@ -267,7 +267,11 @@ def run_batch(
         raise InvalidInputError(f"expected on_result as a callable, got {describe(on_result)}")
     wf = batch_workflow(command)
     opts = batch_options(wf, options)
-    jobs = plan_jobs(pattern, out_dir, out_suffix=out_suffix, writes=wf.suffixes)
+    from imageform._files import RAW_SUFFIXES
+    from imageform.io import IMAGE_FORMATS
+
+    reads = RAW_SUFFIXES if wf.name == "develop" else tuple(IMAGE_FORMATS)  # a folder's inputs
+    jobs = plan_jobs(pattern, out_dir, out_suffix=out_suffix, writes=wf.suffixes, reads=reads)
     for suffix in sorted({j.output.suffix.lower() for j in jobs}):
         if suffix not in wf.suffixes:
             raise InvalidInputError(

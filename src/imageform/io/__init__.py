@@ -76,6 +76,7 @@ from imageform.io.png import read_png, write_png
 from imageform.io.raw import (
     CALIBRATION_ILLUMINANTS,
     RAW_MAX_PIXELS,
+    RAW_SUFFIXES,
     Development,
     RawImage,
     develop,
@@ -114,6 +115,7 @@ __all__ = [
     "OPTICS_MODELS",
     "PLAN_MESH_SUFFIXES",
     "RAW_MAX_PIXELS",
+    "RAW_SUFFIXES",
     "RGB_PROFILED",
     "STEREO_FILE_FORMAT",
     "STEREO_FILE_VERSION",

@@ -28,7 +28,7 @@ from typing import Any, Literal
 import numpy as np
 
 from imageform import _deprecate
-from imageform._files import atomic_write, check_writable
+from imageform._files import RAW_SUFFIXES, atomic_write, check_writable
 from imageform._typing import ArrayLike
 from imageform._validate import describe
 from imageform.errors import InvalidInputError, UnreadableFileError
@@ -36,6 +36,7 @@ from imageform.errors import InvalidInputError, UnreadableFileError
 __all__ = [
     "CALIBRATION_ILLUMINANTS",
     "RAW_MAX_PIXELS",
+    "RAW_SUFFIXES",
     "Development",
     "RawImage",
     "develop",

@@ -11,17 +11,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from imageform._files import RAW_SUFFIXES as _RAW_SUFFIXES
 from imageform.errors import InvalidInputError
 
 #: The optional description of the lab set inside the folder.
 LAB_MANIFEST = "lab.toml"
 _IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".npy")
-#: Raw files (read with LibRaw): the suffixes of the formats it reads, old and new.
-_RAW_SUFFIXES = (
-    ".dng", ".cr2", ".cr3", ".crw", ".nef", ".nrw", ".arw", ".sr2", ".srf", ".raf", ".orf",
-    ".rw2", ".rwl", ".raw", ".pef", ".srw", ".3fr", ".fff", ".iiq", ".mos", ".mef", ".mrw",
-    ".x3f", ".erf", ".kdc", ".dcr", ".k25", ".gpr",
-)  # fmt: skip
 _MANIFEST_KEYS: dict[str, tuple[str, ...]] = {
     "camera": (
         "name",
