@@ -249,7 +249,8 @@ def test_stereo_calibrate_refuses_one_folder_for_both_cameras(
     assert "left and right both name the image" in _line(capsys)
     assert main([*base, str(views), str(other)]) == 1  # a folder stands for its images
     line = _line(capsys)
-    assert line.startswith(f"imageform: error: folder {other} holds no images (.bmp, ")
+    assert line.startswith(f"imageform: error: folder {other} holds no images (.")
+    assert ".bmp, " in line and ".png, " in line
     assert not out.exists()
 
 
