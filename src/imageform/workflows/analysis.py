@@ -226,14 +226,35 @@ class StainNormalizeOptions(ImageIn, ImageOut, RgbFrom):
 #: The words ``--mask`` takes (anything else is a mask image's path).
 _MASK_WORDS = ("auto", "he", "none")
 
+#: The most pixels an image's stain statistics are measured on: a larger image is sampled
+#: every ``step``-th row and column, as ``imageform chunked stain-normalize`` samples level 0
+#: (:data:`imageform.batch.chunked.STAIN_SAMPLE_PIXELS`, the same number: tests check it).
+_STAIN_SAMPLE_PIXELS = 4_000_000
+
+
+def _sample_step(img: Any) -> int:
+    """Return the smallest step ``s`` such that ``img[::s, ::s]`` fits the sample's pixels."""
+    h, w = int(img.shape[0]), int(img.shape[1])
+    step = 1
+    while -(-h // step) * -(-w // step) > _STAIN_SAMPLE_PIXELS:
+        step += 1
+    return step
+
 
 def _stain_mask(
-    opts: StainNormalizeOptions, img: Any, *, target: bool = False, path: Path | None = None
+    opts: StainNormalizeOptions,
+    img: Any,
+    *,
+    target: bool = False,
+    path: Path | None = None,
+    step: int = 1,
 ) -> Any:
-    """Return what ``--mask`` means for one image: a keyword (Macenko) or booleans.
+    """Return what ``--mask`` means for one image's sample ``img[::step, ::step]``.
 
-    ``auto`` and ``he`` on a file that states its pixel size (``path``; OME or Aperio TIFF):
-    :func:`~imageform.analysis.tissue_mask` with that ``pixel_size_um``, as booleans.
+    A keyword (Macenko: the estimator makes its own mask on the sample) or booleans of the
+    sample's shape. ``auto`` and ``he`` on a file that states its pixel size (``path``; OME or
+    Aperio TIFF): :func:`~imageform.analysis.tissue_mask` with that ``pixel_size_um`` (times
+    ``step``), as booleans. A mask image is of the whole image's size, sampled alike.
     """
     import numpy as np
 
@@ -252,18 +273,19 @@ def _stain_mask(
                     f"{key}: expected a mask of the image's size {img.shape[1]} x "
                     f"{img.shape[0]}, got {m.shape[-1]} x {m.shape[0]}"
                 )
-            return m
+            return m[::step, ::step]
     if key == "none":
         return None
     size = pixel_size_um(path) if path is not None else None
-    mpp = None if size is None else float(np.sqrt(size[0] * size[1]))
+    mpp = None if size is None else float(np.sqrt(size[0] * size[1])) * step
+    sample = img[::step, ::step]
     if opts.method == "macenko":  # the estimator's own I0 and no glass rule, as mask="auto"
         return (
             key
             if mpp is None
-            else analysis.tissue_mask(img, glass=False, he=key == "he", pixel_size_um=mpp)
+            else analysis.tissue_mask(sample, glass=False, he=key == "he", pixel_size_um=mpp)
         )
-    return analysis.tissue_mask(img, he=key == "he", pixel_size_um=mpp)
+    return analysis.tissue_mask(sample, he=key == "he", pixel_size_um=mpp)
 
 
 def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
@@ -283,10 +305,12 @@ def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
                 f"--method {other}, or give the reference image for --method {opts.method}"
             ) from None
     ref = _srgb(run, opts.target, opts, clip=True)[1]
-    mask = _stain_mask(opts, ref, target=True, path=opts.target)
+    step = _sample_step(ref)
+    mask = _stain_mask(opts, ref, target=True, path=opts.target, step=step)
+    sample = ref[::step, ::step]
     if opts.method == "macenko":
-        return _macenko(ref, mask, f"--target {opts.target}")
-    return analysis.reinhard_stats(ref, mask)
+        return _macenko(sample, mask, f"--target {opts.target}")
+    return analysis.reinhard_stats(sample, mask)
 
 
 def _macenko(img: Any, mask: Any, what: str) -> Any:
@@ -313,12 +337,20 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
 
     read_as, img, space = _srgb(run, image, opts, clip=True)
     stats = _stain_target(run, opts)
-    mask = _stain_mask(opts, img, path=image)
-    source = _macenko(img, mask, str(image)) if opts.method == "macenko" else None
+    step = _sample_step(img)  # the statistics of a large image from a regular sample
+    mask = _stain_mask(opts, img, path=image, step=step)
+    sample = img[::step, ::step]
+    if step > 1:
+        run.note(
+            f"stain statistics measured on one row and column in {step} "
+            f"({sample.shape[1]} x {sample.shape[0]} px), as chunked processing samples"
+        )
+    source = _macenko(sample, mask, str(image)) if opts.method == "macenko" else None
     if source is not None:
         result = analysis.macenko_normalize(img, stats, source=source)
     else:
-        result = analysis.reinhard_normalize(img, stats, mask=mask)
+        own = analysis.reinhard_stats(sample, mask)
+        result = analysis.reinhard_normalize(img, stats, source_stats=own)
     n_out = write(run, out, np.asarray(result), opts, like=read_as)
     if opts.save_target is not None:
         stats.to_json(run.file(opts.save_target))
