@@ -240,6 +240,20 @@ def _producer(wf: Workflow, opts: Options) -> dict[str, Any]:
     return {"command": wf.name, "options": json_ready(opts), "option_files": files}
 
 
+def _suffix_list(value: object, name: str) -> list[str]:
+    """Return ``value``, a list or tuple of file suffixes (``'.png'``), lower-cased, or refuse."""
+    from imageform._validate import describe
+
+    kinds: list[str] = []
+    if isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value):
+        kinds = [str(v).lower() for v in value]
+    if not kinds or not all(k.startswith(".") and len(k) > 1 for k in kinds):
+        raise InvalidInputError(
+            f"expected {name} as file suffixes such as ('.png', '.tif'), got {describe(value)}"
+        )
+    return kinds
+
+
 def plan_jobs(
     pattern: str,
     out_dir: str | Path,
@@ -303,23 +317,8 @@ def plan_jobs(
     folder = os.path.isdir(pattern) and not any(c in pattern for c in "*?[")
     if folder:
         pattern = os.path.join(pattern, "*")  # a folder: its files
-    keep = None
-    if reads is not None:
-        ok = isinstance(reads, (list, tuple)) and all(isinstance(r, str) for r in reads)
-        keep = {r.lower() for r in reads} if ok else set()
-        if not keep or not all(k.startswith(".") and len(k) > 1 for k in keep):
-            raise InvalidInputError(
-                f"expected reads as file suffixes such as ('.png', '.tif'), got {describe(reads)}"
-            )
-    fallback = None
-    if writes is not None:
-        ok = isinstance(writes, (list, tuple)) and all(isinstance(w, str) for w in writes)
-        kinds = [w.lower() for w in writes] if ok else []
-        if not kinds or not all(k.startswith(".") and len(k) > 1 for k in kinds):
-            raise InvalidInputError(
-                f"expected writes as file suffixes such as ('.png', '.tif'), got {describe(writes)}"
-            )
-        fallback = kinds[0]
+    keep = None if reads is None else set(_suffix_list(reads, "reads"))
+    kinds = None if writes is None else _suffix_list(writes, "writes")
     base = Path(os.path.abspath(glob_base(pattern)))
     inputs = sorted(Path(os.path.abspath(p)) for p in glob_paths(pattern) if os.path.isfile(p))
     if folder and keep is not None:
@@ -342,8 +341,8 @@ def plan_jobs(
         real_out = real_out_root / rel
         if out_suffix is not None:
             out, real_out = out.with_suffix(out_suffix), real_out.with_suffix(out_suffix)
-        elif fallback is not None and p.suffix.lower() not in kinds:
-            out, real_out = out.with_suffix(fallback), real_out.with_suffix(fallback)
+        elif kinds is not None and p.suffix.lower() not in kinds:
+            out, real_out = out.with_suffix(kinds[0]), real_out.with_suffix(kinds[0])
         if (
             str(out) in {str(i) for i in inputs}
             or matcher.match(str(out))
