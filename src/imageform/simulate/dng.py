@@ -23,6 +23,17 @@ __all__ = [
 ]
 
 
+def _gains_and_matrix(result: SimulationResult) -> tuple[np.ndarray, np.ndarray]:
+    """Return the simulator's white-balance gains and colour matrix from ``result``."""
+    if not isinstance(result, SimulationResult):
+        raise InvalidInputError(
+            f"expected a SimulationResult (simulate), got {type(result).__name__}"
+        )
+    g = np.asarray(result.metrics["white_balance_gains"], np.float64)
+    M = np.asarray(result.metrics["color_correction_matrix"], np.float64)
+    return g, M
+
+
 def simulated_color_matrix(result: SimulationResult) -> tuple[np.ndarray, np.ndarray]:
     r"""Return the simulated camera's DNG colour description: ``(color_matrix, as_shot_neutral)``.
 
@@ -35,12 +46,7 @@ def simulated_color_matrix(result: SimulationResult) -> tuple[np.ndarray, np.nda
     """
     from imageform.color import rgb_to_xyz_matrix
 
-    if not isinstance(result, SimulationResult):
-        raise InvalidInputError(
-            f"expected a SimulationResult (simulate), got {type(result).__name__}"
-        )
-    g = np.asarray(result.metrics["white_balance_gains"], np.float64)
-    M = np.asarray(result.metrics["color_correction_matrix"], np.float64)
+    g, M = _gains_and_matrix(result)
     A = np.asarray(rgb_to_xyz_matrix("srgb"), np.float64) @ M.T @ np.diag(g)
     neutral = 1.0 / g
     return np.linalg.inv(A), neutral / neutral.max()
@@ -60,12 +66,7 @@ def simulated_baseline_exposure(result: SimulationResult) -> float:
     the stops by which the default rendering should be brightened). 0 where :math:`M` does
     not keep white (no single factor renders every colour the simulator's way).
     """
-    if not isinstance(result, SimulationResult):
-        raise InvalidInputError(
-            f"expected a SimulationResult (simulate), got {type(result).__name__}"
-        )
-    g = np.asarray(result.metrics["white_balance_gains"], np.float64)
-    M = np.asarray(result.metrics["color_correction_matrix"], np.float64)
+    g, M = _gains_and_matrix(result)
     s = np.ones(3) @ M
     if not (np.all(s > 0) and np.allclose(s, s[1], rtol=1e-6) and np.all(g > 0)):
         return 0.0
