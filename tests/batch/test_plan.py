@@ -207,3 +207,14 @@ def test_batch_develop_takes_a_folder_of_raw_files(tmp_path: Path) -> None:
     assert out.name == "a.png" and not list((tmp_path / "out").glob("*.dng"))
     img = read_image(out)
     assert img.shape == (128, 192, 3)
+
+
+def test_a_batch_command_says_which_files_its_input_reads() -> None:
+    """``Input.suffixes`` picks a folder's files for ``imageform batch``: develop's input reads
+    the raw suffixes; every other batch command's reads the image files (None)."""
+    from imageform.io import RAW_SUFFIXES
+    from imageform.workflows import WORKFLOWS, get_workflow
+
+    reads = {w.name: w.inputs[0].suffixes for w in map(get_workflow, WORKFLOWS) if w.batch}
+    assert reads.pop("develop") == RAW_SUFFIXES
+    assert reads and all(v is None for v in reads.values())

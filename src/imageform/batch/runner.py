@@ -267,10 +267,10 @@ def run_batch(
         raise InvalidInputError(f"expected on_result as a callable, got {describe(on_result)}")
     wf = batch_workflow(command)
     opts = batch_options(wf, options)
-    from imageform._files import RAW_SUFFIXES
     from imageform.io import IMAGE_FORMATS
 
-    reads = RAW_SUFFIXES if wf.name == "develop" else tuple(IMAGE_FORMATS)  # a folder's inputs
+    # a folder stands for its files of the kinds the command's input reads
+    reads = wf.inputs[0].suffixes or tuple(IMAGE_FORMATS)
     jobs = plan_jobs(pattern, out_dir, out_suffix=out_suffix, writes=wf.suffixes, reads=reads)
     for suffix in sorted({j.output.suffix.lower() for j in jobs}):
         if suffix not in wf.suffixes:

@@ -332,6 +332,10 @@ class Input:
     kind: str = "file"
     #: A folder given stands for the image files in it (:func:`imageform.io.image_files`).
     folders: bool = False
+    #: The file suffixes this input reads, which pick a folder's files in ``imageform batch``
+    #: (``develop``: :data:`imageform.io.RAW_SUFFIXES`); None: the image files
+    #: (:data:`imageform.io.IMAGE_FORMATS`).
+    suffixes: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         if self.metavar is not None and not isinstance(self.metavar, str):

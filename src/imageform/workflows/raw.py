@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal, get_args
 
+from imageform._files import RAW_SUFFIXES
 from imageform.workflows._images import Device, ImageOut, image_out_renames, write
 from imageform.workflows._spec import Input, Options, Output, Result, Run, Workflow, option
 
@@ -251,6 +252,7 @@ WORKFLOWS = (
                 "raw",
                 "Raw file LibRaw reads (needs imageform[raw]; the DNG imageform writes does not).",
                 metavar="RAW",
+                suffixes=RAW_SUFFIXES,
             ),
         ),
         Output("Output image (PNG 16-bit by default, JPEG, TIFF float32, .npy)."),
