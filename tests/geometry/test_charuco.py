@@ -5,6 +5,8 @@ from ChArUco views rendered through a known camera with distortion."""
 
 from __future__ import annotations
 
+import functools
+
 from pathlib import Path
 from typing import Any
 
@@ -551,6 +553,20 @@ def test_detect_charuco_refusals() -> None:
 # ------------------------------------------------------------------ calibration
 
 
+@functools.lru_cache(maxsize=4)
+def _pixel_rays(k: bytes, dist: bytes, w: int, h: int) -> np.ndarray:
+    """Each pixel's undistorted normalised coordinates (cv2.undistortPoints), computed once per
+    camera: the views of a calibration set share them (0.7 s a view)."""
+    K = np.frombuffer(k, np.float64).reshape(3, 3)
+    d = np.frombuffer(dist, np.float64)
+    uu, vv = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    pix = np.stack([uu.ravel(), vv.ravel()], axis=1).reshape(-1, 1, 2)
+    crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)
+    xy = cv2.undistortPoints(pix, K, d, criteria=crit).reshape(-1, 2)
+    xy.flags.writeable = False
+    return xy
+
+
 def _render_view(
     board: CharucoBoard,
     art: np.ndarray,
@@ -564,10 +580,9 @@ def _render_view(
     """The board seen by a camera with Brown-Conrady distortion: each pixel's ray (through
     cv2.undistortPoints) meets the board plane; the board image is sampled there."""
     w, h = size
-    uu, vv = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
-    pix = np.stack([uu.ravel(), vv.ravel()], axis=1).reshape(-1, 1, 2)
-    crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)
-    xy = cv2.undistortPoints(pix, K, dist, criteria=crit).reshape(-1, 2)
+    xy = _pixel_rays(
+        np.asarray(K, np.float64).tobytes(), np.asarray(dist, np.float64).tobytes(), w, h
+    )
     R, _ = cv2.Rodrigues(rvec)
     rays = np.column_stack([xy, np.ones(len(xy))]) @ R  # rows: R^T ray
     origin = -R.T @ tvec
