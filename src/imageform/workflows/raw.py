@@ -54,6 +54,12 @@ class DevelopOptions(ImageOut, Options):
         help="Brighten by the DNG's BaselineExposure (2^EV), as Adobe's readers do; LibRaw "
         "ignores it. Not with --auto-bright.",
     )
+    highlight_rolloff: bool = option(
+        False,
+        help="With --baseline-exposure or --auto-bright: roll the brightened highlights off "
+        "smoothly into white (kept up to 0.8 linear, white at the sensor's white) instead of "
+        "clipping them.",
+    )
     opcodes: bool = option(
         True,
         help="Apply a DNG's opcodes as Adobe's DNG SDK does: GainMaps (the lens-shading "
@@ -187,6 +193,7 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
         transfer=opts.transfer,
         auto_bright=opts.auto_bright,
         baseline_exposure=opts.baseline_exposure,
+        highlight_rolloff=opts.highlight_rolloff,
     )
     for note in dev.notes:
         run.note(note)
