@@ -157,6 +157,7 @@ def raw_info(path: Path) -> Result:
         "opcodes_applied_other": list(raw.metadata.get("opcodes_applied_other", [])),
         "opcodes_decoded": list(raw.metadata.get("opcodes_decoded", [])),
         "opcodes_at_development": stage3_names(raw.metadata),
+        "baseline_exposure_ev": raw.metadata.get("baseline_exposure_ev"),
     }
     model = summary["camera_model"] or "camera not named"
     text = [
@@ -165,6 +166,12 @@ def raw_info(path: Path) -> Result:
         f"{raw.white_level:g}; develop with imageform develop",
         *opcode_notes(raw.metadata),
     ]
+    ev = summary["baseline_exposure_ev"]
+    if ev:  # the camera's recommended exposure offset: applied only when asked
+        text.append(
+            f"BaselineExposure {ev:+.2f} EV (develop --baseline-exposure applies it"
+            + (", --highlight-rolloff keeps the highlights it would clip)" if ev > 0 else ")")
+        )
     return Result(summary, tuple(text))
 
 
