@@ -86,6 +86,10 @@ def run_tree(name: str, src: str, width: int, folder: Path) -> list[list[str]]:
         ("develop (no brightening, LibRaw's matched settings)", []),
         ("develop --auto-bright (LibRaw's default brightening)", ["--auto-bright"]),
         ("develop --baseline-exposure (the DNG's BaselineExposure)", ["--baseline-exposure"]),
+        (
+            "develop --baseline-exposure --highlight-rolloff (highlights rolled off)",
+            ["--baseline-exposure", "--highlight-rolloff"],
+        ),
     ):
         png = folder / "dev.png"
         dev = _imageform(

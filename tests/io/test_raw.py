@@ -399,3 +399,10 @@ def test_simulated_dng_develops_as_the_simulation(simulated: tuple[Path, object,
     dark = develop(raw, demosaic="menon", linear=True)
     ratio = np.median(im[ok] / np.maximum(np.asarray(dark.image, np.float64)[ok], 1e-6))
     assert ratio == pytest.approx(2**ev, rel=1e-3)
+    # the highlights rolled off: the same under the knee (0.8), nothing clipped the sensor kept
+    rolled = develop(raw, demosaic="menon", linear=True, baseline_exposure=True,
+                     highlight_rolloff=True).image  # fmt: skip
+    low = im < 0.79
+    np.testing.assert_allclose(rolled[low], im[low], atol=3e-5)
+    assert np.mean(rolled >= 1.0) <= np.mean(im >= 1.0)
+    assert np.all(rolled[~low] >= 0.79)

@@ -664,6 +664,30 @@ def _truncated(p: Path, end: int, size: int) -> UnreadableFileError:
     )
 
 
+#: The first line of a Git LFS pointer file (what a clone without ``git lfs`` holds).
+_LFS_POINTER = b"version https://git-lfs.github.com/spec/"
+
+
+def _lfs_pointer(p: Path, n_bytes: int) -> UnreadableFileError | None:
+    """Refuse a Git LFS pointer file (the raw file itself never fetched), naming its size."""
+    if n_bytes > 1024:
+        return None
+    with p.open("rb") as f:
+        text = f.read(1024)
+    if not text.startswith(_LFS_POINTER):
+        return None
+    size = next(
+        (ln.split()[1] for ln in text.decode("ascii", "replace").splitlines()
+         if ln.startswith("size ") and len(ln.split()) == 2),
+        "?",
+    )  # fmt: skip
+    return UnreadableFileError(
+        p,
+        f"a Git LFS pointer, not the raw file: the {size}-byte file it stands for was never "
+        "fetched (git lfs pull)",
+    )
+
+
 def _tag_bytes(value: Any) -> bytes:
     """Return an UNDEFINED tag's value as bytes (tifffile gives bytes or a tuple of ints)."""
     return value if isinstance(value, bytes) else bytes(np.asarray(value, np.uint8).ravel())
@@ -688,6 +712,8 @@ def _read_raw(
     p = Path(path)
     if not p.is_file():
         raise InvalidInputError(f"raw file {p} does not exist")
+    if (lfs := _lfs_pointer(p, p.stat().st_size)) is not None:
+        raise lfs
     if importlib.util.find_spec("rawpy") is None:
         # without LibRaw, a DNG as imageform writes it (one uncompressed CFA image) is read
         # with tifffile; any other raw file needs the extra (the message says so)
@@ -1213,6 +1239,9 @@ class Development:
     brightness : float
         The factor on the linear output (``develop(auto_bright=True)`` or
         ``baseline_exposure=True``; 1 otherwise).
+    highlight_rolloff : bool
+        The brightened values roll off below white (:func:`_highlight_shoulder`) instead of
+        clipping (``develop(highlight_rolloff=True)`` with a brightness above 1).
     """
 
     def __init__(
@@ -1262,6 +1291,8 @@ class Development:
         self.notes = notes
         self._device = device  # "cuda": the fused pass runs as one CUDA kernel
         self.brightness = 1.0  # auto_bright's factor on the linear output
+        # the brightening rolled off below white (develop(highlight_rolloff=True)), not clipped
+        self.highlight_rolloff = False
         # a DNG's OpcodeList3 opcodes to apply to the demosaiced camera RGB (the opcodes, the
         # offset, the area: develop sets them), applied when camera RGB is first read (then
         # kept) or, for a warp, in the render's own pass; None: none, or applied
@@ -1441,6 +1472,10 @@ class Development:
         from imageform.color import rgb_to_xyz_matrix
 
         to_rgb = np.linalg.inv(np.asarray(rgb_to_xyz_matrix(self.space), np.float64))
+        if self.highlight_rolloff:  # brightened in the table, with its shoulder
+            m = (to_rgb @ self.adaptation @ self.camera_to_xyz).astype(np.float32)
+            out = np.clip(self.camera_rgb @ m.T, 0.0, 1.0)
+            return _highlight_shoulder(self.brightness * out, self.brightness).astype(np.float32)
         m = (to_rgb @ self.adaptation @ self.camera_to_xyz * self.brightness).astype(np.float32)
         out = self.camera_rgb @ m.T
         return np.clip(out, 0.0, 1.0, out=out)
@@ -1498,13 +1533,52 @@ def _black_plane(raw: RawImage) -> np.ndarray:
     return np.tile(black, (h // 2 + 1, w // 2 + 1))[:h, :w]
 
 
-def _transfer_table(transfer: str) -> np.ndarray:
-    """Return the transfer function sampled uniformly in sqrt(x) (the render kernel's table)."""
+def _transfer_table(transfer: str, gain: float = 1.0) -> np.ndarray:
+    """Return the transfer function sampled uniformly in sqrt(x) (the render kernel's table).
+
+    ``gain`` above 1: the table maps the unbrightened linear value v to the encoding of
+    :func:`_highlight_shoulder` (``gain`` v): the brightening and its highlight roll-off in
+    the table (``transfer`` ``"linear"``: no encoding).
+    """
     from imageform._kernels.raw_develop import LUT_SIZE
     from imageform.color import encode
 
     u = np.linspace(0.0, 1.0, LUT_SIZE + 1)
-    return np.asarray(encode(u * u, transfer), np.float64).astype(np.float32)
+    v = u * u
+    if gain > 1.0:
+        v = _highlight_shoulder(gain * v, gain)
+    if transfer == "linear":
+        return v.astype(np.float32)
+    return np.asarray(encode(v, transfer), np.float64).astype(np.float32)
+
+
+#: Where the highlight roll-off starts, in the output's linear values (below it the
+#: brightened values are kept as they are).
+_SHOULDER_KNEE = 0.8
+
+
+def _highlight_shoulder(y: np.ndarray, gain: float, knee: float = _SHOULDER_KNEE) -> np.ndarray:
+    r"""Roll brightened linear values in [0, ``gain``] off into [0, 1] instead of clipping them.
+
+    .. math::
+
+        f(y) = \begin{cases} y & y \le k \\
+        k + (1 - k)\,\dfrac{s\,t}{1 + (s - 1)\,t},\quad
+        t = \dfrac{y - k}{g - k},\ s = \dfrac{g - k}{1 - k} & y > k \end{cases}
+
+    with g the gain (the brightened sensor white) and k the knee: the identity up to k, then
+    a rational (Reinhard-like) shoulder continuous with slope 1 at the knee, increasing, that
+    reaches 1 exactly at the sensor's white (slope 1/s there): no value clips that the sensor
+    did not clip. A gain of 1 or less clips nothing: the identity.
+    """
+    y = np.asarray(y, np.float64)
+    g = float(gain)
+    if g <= 1.0:
+        return np.minimum(y, 1.0)
+    k = float(knee)
+    s = (g - k) / (1.0 - k)
+    t = np.clip((y - k) / (g - k), 0.0, 1.0)
+    return np.where(y <= k, y, k + (1.0 - k) * s * t / (1.0 + (s - 1.0) * t))
 
 
 def develop(
@@ -1519,6 +1593,7 @@ def develop(
     transfer: str | None = None,
     auto_bright: bool = False,
     baseline_exposure: bool = False,
+    highlight_rolloff: bool = False,
 ) -> Development:
     r"""Develop a raw image with imageform's own pipeline, keeping every stage.
 
@@ -1585,6 +1660,14 @@ def develop(
         Adobe's DNG SDK does (DNG specification 1.4.0.0, chapter 4: the camera's
         recommended exposure offset; ``metadata["baseline_exposure_ev"]``, 1 where the
         file has none, with a note). LibRaw ignores the tag. Not with ``auto_bright``.
+    highlight_rolloff : bool
+        With ``baseline_exposure`` or ``auto_bright`` (a brightness g above 1): roll the
+        brightened highlights off into white instead of clipping them. The linear output is
+        kept up to 0.8 (the knee), then compressed by a smooth shoulder
+        (:func:`_highlight_shoulder`, per channel) that reaches white exactly at the sensor's
+        white (g): nothing clips that the sensor did not. Off by default: values above
+        1/g of the sensor's white clip, as in Adobe's DNG SDK, whose exposure ramp
+        (``dng_function_exposure_ramp``) clips them before its tone curve.
     device : {"cpu", "cuda"}
         Where steps 1-6 of a Bayer mosaic run. ``"cuda"``: bilinear and Malvar development
         as one CUDA kernel (:func:`imageform._cuda.demosaic.develop_bayer`: the mosaic copied
@@ -1772,6 +1855,12 @@ def develop(
         else:
             dev.brightness = float(2.0 ** float(ev))
             dev._render = (m * np.float32(dev.brightness)).astype(np.float32)
+    if highlight_rolloff and dev.brightness > 1.0:
+        # the gain and its shoulder in the transfer table: the matrix stays unbrightened, so
+        # the linear values reach the table unclipped up to the sensor's white
+        dev.highlight_rolloff = True
+        dev._render = m
+        dev._table = _transfer_table(encoding, dev.brightness)
     return dev
 
 

@@ -55,6 +55,12 @@ class DevelopOptions(ImageOut, Options):
         help="Brighten by the DNG's BaselineExposure (2^EV), as Adobe's readers do; LibRaw "
         "ignores it. Not with --auto-bright.",
     )
+    highlight_rolloff: bool = option(
+        False,
+        help="With --baseline-exposure or --auto-bright: roll the brightened highlights off "
+        "smoothly into white (kept up to 0.8 linear, white at the sensor's white) instead of "
+        "clipping them.",
+    )
     opcodes: bool = option(
         True,
         help="Apply a DNG's opcodes as Adobe's DNG SDK does: GainMaps (the lens-shading "
@@ -152,6 +158,7 @@ def raw_info(path: Path) -> Result:
         "opcodes_applied_other": list(raw.metadata.get("opcodes_applied_other", [])),
         "opcodes_decoded": list(raw.metadata.get("opcodes_decoded", [])),
         "opcodes_at_development": stage3_names(raw.metadata),
+        "baseline_exposure_ev": raw.metadata.get("baseline_exposure_ev"),
     }
     model = summary["camera_model"] or "camera not named"
     text = [
@@ -160,6 +167,12 @@ def raw_info(path: Path) -> Result:
         f"{raw.white_level:g}; develop with imageform develop",
         *opcode_notes(raw.metadata),
     ]
+    ev = summary["baseline_exposure_ev"]
+    if ev:  # the camera's recommended exposure offset: applied only when asked
+        text.append(
+            f"BaselineExposure {ev:+.2f} EV (develop --baseline-exposure applies it"
+            + (", --highlight-rolloff keeps the highlights it would clip)" if ev > 0 else ")")
+        )
     return Result(summary, tuple(text))
 
 
@@ -188,6 +201,7 @@ def develop(run: Run, opts: DevelopOptions, *, raw: Path, out: Path) -> Result:
         transfer=opts.transfer,
         auto_bright=opts.auto_bright,
         baseline_exposure=opts.baseline_exposure,
+        highlight_rolloff=opts.highlight_rolloff,
     )
     for note in dev.notes:
         run.note(note)
