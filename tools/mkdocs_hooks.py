@@ -146,7 +146,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "stereo-vertical": "benchmarks/check_stereo_vertical.py",
     "stereo-noise": "benchmarks/check_stereo_noise.py",
     "stereo-webcam": "benchmarks/check_stereo_webcam.py",
-    "stereo-slant": "benchmarks/check_stereo_slant.py",
+    "stereo-slant": "benchmarks/check_stereo_recess.py",  # 30h: check_stereo_slant.py
     "stereo-planes": "benchmarks/check_stereo_planes.py",
     "track": "benchmarks/bench_track.py",
     "twin-loop": "benchmarks/check_twin_loop.py",
