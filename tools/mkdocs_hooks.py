@@ -148,6 +148,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "stereo-noise": "benchmarks/check_stereo_noise.py",
     "stereo-webcam": "benchmarks/check_stereo_webcam.py",
     "stereo-slant": "benchmarks/check_stereo_slant.py",
+    "stereo-recess": "benchmarks/check_stereo_recess.py",
     "stereo-planes": "benchmarks/check_stereo_planes.py",
     "track": "benchmarks/bench_track.py",
     "twin-loop": "benchmarks/check_twin_loop.py",

@@ -794,3 +794,35 @@ def test_plane_fill_keeps_a_region_whose_plane_would_hide_matched_texture(
     np.testing.assert_array_equal(_plane_fill(disp, grey, 0, 16), disp)
     monkeypatch.setattr(sm, "PLANE_HIDE", np.inf)
     np.testing.assert_allclose(_plane_fill(disp, grey, 0, 16)[flat], 20.0, atol=1e-3)
+
+
+def test_plane_fill_keeps_a_recess_seen_past_nearer_surfaces(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Five flat squares on one plane, their rims on it within 0.05 px but for the first
+    square's (within 0.9 px: a rim across an occluding edge), whose own matched disparities
+    lie 1.5 px behind the plane (a recess under a bench): that square keeps them, the others
+    take the plane; a rim as rough with the square's pixels in front, or PLANE_RECESS off,
+    and the plane is taken."""
+    h, w = 120, 330
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    rng = np.random.default_rng(5)
+    grey = rng.uniform(0, 255, (h, w)).astype(np.float32)
+    plane = (5.0 + 0.02 * x - 0.01 * y).astype(np.float32)
+    disp = plane + rng.uniform(-0.05, 0.05, (h, w)).astype(np.float32)
+    squares = [(slice(40, 70), slice(20 + 60 * i, 50 + 60 * i)) for i in range(5)]
+    for sq in squares:
+        grey[sq] = 128.0
+    inner = [(slice(s.start + 2, s.stop - 2), slice(c.start + 2, c.stop - 2)) for s, c in squares]
+    rough = (slice(34, 76), slice(14, 56))
+    disp[rough] = plane[rough] + rng.uniform(-0.9, 0.9, (42, 42)).astype(np.float32)
+    disp[inner[0]] = plane[inner[0]] - 1.5
+    out = _plane_fill(disp, grey, 0, 16)
+    np.testing.assert_array_equal(out[inner[0]], disp[inner[0]])
+    for sq in inner[1:]:
+        np.testing.assert_allclose(out[sq], plane[sq], atol=0.05)
+    monkeypatch.setattr(sm, "PLANE_RECESS", (np.inf, 0.15, 0.25))
+    np.testing.assert_allclose(_plane_fill(disp, grey, 0, 16)[inner[0]], plane[inner[0]], atol=0.3)
+    monkeypatch.undo()
+    disp[inner[0]] = plane[inner[0]] + 1.5  # in front of the plane: no recess
+    np.testing.assert_allclose(_plane_fill(disp, grey, 0, 16)[inner[0]], plane[inner[0]], atol=0.3)

@@ -77,6 +77,13 @@ PLANE_PHOTO = 1.4
 #: pixels would, on the plane, hide a textured pixel matched to the same right pixel (a plane
 #: nearer than what the right view sees there)
 PLANE_HIDE = 0.2
+#: ``plane_fill``: a region keeps its matched disparities where its rim fits the plane worse
+#: than this many times the median rim of the image (mean absolute residual, each capped at
+#: 3 px: a rim that spans an occluding edge) and the share of its own valid disparities more
+#: than ``PLANE_RECESS[2]`` px behind the plane exceeds the share as far in front of it by more
+#: than ``PLANE_RECESS[1]`` (a recess seen past nearer surfaces; chosen on the tuning sets of
+#: ``benchmarks/check_stereo_recess.py``: 2 to 4 and 0.1 to 0.25 tried)
+PLANE_RECESS = (3.0, 0.15, 0.25)
 
 
 def _grey(image: Any, name: str) -> NDArray[np.float32]:
@@ -201,18 +208,23 @@ def stereo_disparity(
        ``L(x, y) - R(x - d, y)`` over the region's valid pixels (the right row interpolated
        linearly), or where more than 20 % of its pixels on the plane would land on right
        pixels claimed by textured pixels of a disparity more than 1 px lower (the plane would
-       hide what the right view sees). In a region without
-       texture every disparity costs alike and each path carries in the disparity of the
-       edge it came from, a step costing ``P1``: the sum takes one of those edges' values
+       hide what the right view sees), or where its rim fits the plane more than 3 times
+       worse than the image's median rim and its own matched disparities lie behind the plane
+       more often than in front of it (the shares more than 0.25 px off apart by more than
+       0.15: a recess seen past nearer surfaces, whose rim is the occluders'). In a region
+       without texture every disparity costs alike and each path carries in the disparity
+       of the edge it came from, a step costing ``P1``: the sum takes one of those edges' values
        where a slanted surface's disparity changes (SGM's fronto-parallel bias; the plane
        fits of segments, Hirschmüller 2008 for untextured areas, Klaus et al. ICPR 2006). On
-       ``benchmarks/check_stereo_planes.py``'s board pairs (truth the board's plane) the
+       ``benchmarks/check_stereo_recess.py``'s board pairs (truth the board's plane) the
        share more than 1 px off falls from 8.08 % to 4.87 % on webcam-1 (OpenCV
        ``MODE_HH`` 6.51 %), from 11.66 % to 8.89 % on the XIMEA pairs (OpenCV 10.04 %), from
        10.82 % to 8.43 % on webcam-2 (OpenCV 8.17 %), from 2.39 % to 0.99 % on the da Vinci
-       endoscope's (OpenCV 13.64 %); Middlebury Adirondack's from 5.80 % to 4.68 %, teddy
-       5.41 % to 5.44 % (5.78 % with the rim's plane alone, 2026-11-30h), the mean of six
-       Middlebury 2005 / 2006 scenes 4.00 % both (4.08 %). The cap of 2 % keeps large flat
+       endoscope's (OpenCV 13.64 %); Middlebury Adirondack's from 5.80 % to 4.67 %, teddy
+       5.41 % to 5.37 % (5.78 % with the rim's plane alone, 2026-11-30h), the mean of six
+       Middlebury 2005 / 2006 scenes 4.00 % to 3.99 % (4.08 %), the two ETH3D pairs' mean
+       4.68 % to 4.64 % (4.88 % without the recess test;
+       ``benchmarks/results/stereo-recess-2026-11-30k.md``). The cap of 2 % keeps large flat
        regions (Venus's background, whose long rim spans several surfaces) as matched.
 
     Parameters
@@ -479,7 +491,8 @@ def _plane_fill(
     the rim's and the region's own valid disparities within ``PLANE_INLIER[0]`` px of it, and
     given to every pixel of the region inside the valid band (invalid ones too) unless the
     plane explains the region's pixels worse than its matched disparities (``PLANE_PHOTO``,
-    with the ``right`` image; None skips that test) or hides textured pixels (``PLANE_HIDE``).
+    with the ``right`` image; None skips that test), hides textured pixels (``PLANE_HIDE``)
+    or stands in front of a recess (``PLANE_RECESS``).
     """
     from scipy import ndimage
 
@@ -532,6 +545,7 @@ def _plane_fill(
     if right is not None:
         take &= ~(_photo_ratio(grey, right, yi, xi, disp[inner], plane, k, m) > PLANE_PHOTO)
     take &= ~(_hidden_share(disp, lab, take, coef, m) > PLANE_HIDE)
+    take &= ~_recessed(disp[src], seg, xs, ys, coef, take, disp[inner] - plane, k, m)
     x0 = min(max(min_d + n_d - 1, 0), w)
     x1 = max(min(w, w + min_d), x0)
     sel = take[lab]
@@ -654,6 +668,41 @@ def _hidden_share(
     at = ys[inside] * w + xr[inside].astype(np.intp)
     hides[inside] = p[inside] > low[at] + PLANE_INLIER[0]
     return np.bincount(k, weights=hides, minlength=m) / np.maximum(np.bincount(k, minlength=m), 1)
+
+
+def _recessed(
+    rim: NDArray[np.float32],
+    seg: NDArray[np.intp],
+    xs: NDArray[np.intp],
+    ys: NDArray[np.intp],
+    coef: NDArray[np.float64],
+    take: NDArray[np.bool_],
+    off: NDArray[np.floating[Any]],
+    k: NDArray[np.intp],
+    m: int,
+) -> NDArray[np.bool_]:
+    """Per segment, whether its plane stands in front of a recess seen past nearer surfaces.
+
+    A flat region under a bench or behind a chair has the occluders on its rim: the rim's
+    disparities (``rim`` at ``xs, ys`` of segment ``seg``) fit one plane badly, their mean
+    absolute residual (each capped at 3 px) over ``PLANE_RECESS[0]`` times the median of the
+    segments still taken (0.01 px at least), and the region's own matched disparities
+    (``off``, their offsets from the plane, of segment ``k``) lie behind the plane (by more
+    than ``PLANE_RECESS[2]`` px) more often than in front of it, the shares apart by more than
+    ``PLANE_RECESS[1]``.
+    """
+    out = np.zeros(m, dtype=bool)
+    if not take.any():
+        return out
+    plane = coef[seg, 0] * xs + coef[seg, 1] * ys + coef[seg, 2]
+    resid = np.minimum(np.abs(rim - plane), 3.0)
+    used = np.maximum(np.bincount(seg, minlength=m), 1)
+    fit = np.bincount(seg, weights=resid, minlength=m) / used
+    side = (off < -PLANE_RECESS[2]).astype(np.float64) - (off > PLANE_RECESS[2])
+    lean = np.bincount(k, weights=side, minlength=m) / np.maximum(np.bincount(k, minlength=m), 1)
+    typical = max(float(np.median(fit[take])), 0.01)  # 0.01: rims fitted exactly (synthetic)
+    out[:] = take & (fit > PLANE_RECESS[0] * typical) & (lean > PLANE_RECESS[1])
+    return out
 
 
 def _divisor(nbits: int, window: int) -> int:
