@@ -6,7 +6,6 @@ from ChArUco views rendered through a known camera with distortion."""
 from __future__ import annotations
 
 import functools
-
 from pathlib import Path
 from typing import Any
 
