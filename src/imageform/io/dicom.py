@@ -567,8 +567,8 @@ def multi_frame(p: Path, info: DicomInfo) -> InvalidInputError:
     return UnreadableFileError(
         p,
         f"a multi-frame DICOM of {info.frames} frames of {info.width} x "
-        f"{info.height} px; read one with frame=N, 0 to {info.frames - 1} (imageform info "
-        "and convert: --frame N)",
+        f"{info.height} px; read one with frame=N, 0 to {info.frames - 1} (imageform's "
+        "commands: --frame N)",
     )
 
 

@@ -12,7 +12,9 @@ One rule for every format:
 - **Shape**: an image is ``(H, W, C)``, channels last; a grey image has ``C = 1`` (a 2-D
   TIFF or ``.npy`` comes back as ``(H, W, 1)``).
 - **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
-  (float16 is widened to float32). Other sample types are refused. A TIFF's samples are read
+  (float16 is widened to float32). A TIFF's signed integers (int8, int16, int32: a CT's or a
+  microscope's numbers) come as floats holding each stored number exactly, float32 (float64
+  for int32), as a DICOM's signed samples do. Other sample types are refused. A TIFF's samples are read
   as the values they mean: a palette through its colour map (RGB), a bilevel image as 0/255,
   WhiteIsZero inverted; a CMYK TIFF as sRGB through its embedded CMYK ICC profile (LittleCMS,
   8 and 16 bits; without one refused), a Lab or raw-YCbCr TIFF refused; a palette BMP or GIF as RGB,
@@ -440,7 +442,7 @@ def _tiff_stack(axes: str, shape: tuple[int, ...]) -> str:
     parts = " x ".join(f"{n} {what}" for what, n in stack)
     return (
         f"a stack of {count} images of {w} x {h} px ({parts}); read one with frame=N, "
-        f"0 to {count - 1} (imageform info and convert: --frame N)"
+        f"0 to {count - 1} (imageform's commands: --frame N)"
     )
 
 
@@ -483,6 +485,8 @@ def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, I
         )
     width, height = shape[axes.index("X")], shape[axes.index("Y")]
     dtype = "uint8" if series.dtype == np.bool_ else str(series.dtype)  # bilevel: 0/255
+    if series.dtype.kind == "i" and series.dtype.itemsize <= 4:  # signed: floats, as stored
+        dtype = str(_signed_as_float(series.dtype))
     if int(page.photometric) == 3 and page.colormap is not None:  # palette: RGB, as read
         cmap = np.asarray(page.colormap)
         eight = int(cmap.max(initial=0)) < 256 or not np.any(cmap % 257)
@@ -732,8 +736,9 @@ def image_info(path: str | Path, *, frame: int | None = None) -> ImageInfo:
         _pfm.check_size(ph, p.stat().st_size, p)  # uncompressed: its size is known
         return ImageInfo(ph.width, ph.height, ph.channels, "float32", "pfm")
     if fmt == "hdr":
-        with p.open("rb") as fh:
-            hh = _hdr.header(fh.read(1 << 16), p)
+        data = p.read_bytes()
+        hh = _hdr.header(data[: 1 << 16], p)
+        _hdr.check_size(hh, data, p)  # its scanlines stepped over, not decoded
         return ImageInfo(hh.width, hh.height, 3, "float32", "hdr")
     if fmt == "heif":
         return _heif_info(_open_heif(p))  # libheif's size: its rotation applied
@@ -830,7 +835,7 @@ def _pillow_frame(p: Path, im: Any, fmt: str, frame: int | None) -> None:
         raise UnreadableFileError(
             p,
             f"an animated {name} of {count} frames; read one with frame=N, 0 to {count - 1} "
-            "(imageform info and convert: --frame N)",
+            "(imageform's commands: --frame N)",
         )
     if _check_frame(p, frame, count):
         im.seek(int(frame))
@@ -1247,6 +1252,15 @@ def _tiff_frame(series: Any, path: Path, frame: int | None) -> tuple[np.ndarray,
     return whole[tuple(next(pick) if a not in "YXS" else slice(None) for a in axes)], plane
 
 
+def _signed_as_float(dtype: Any) -> np.dtype[Any]:
+    """The float type a TIFF's signed integer samples are read as: each number exactly.
+
+    float32 holds int8 and int16 exactly, float64 int32 (float32's 24-bit mantissa does
+    not), as a DICOM's signed samples come as float32, float64 beyond 24 stored bits.
+    """
+    return np.dtype(np.float32 if np.dtype(dtype).itemsize <= 2 else np.float64)
+
+
 def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarray, bool]:
     tifffile = _tifffile()
     try:
@@ -1276,6 +1290,8 @@ def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarra
     if cmyk is not None:
         return _orient(_tiff_cmyk_to_rgb(p, arr, cmyk), orientation), extra > 0
     arr = _tiff_samples(p, arr, photometric, bits, colormap)
+    if arr.dtype.kind == "i" and arr.dtype.itemsize <= 4:  # int8/16/32: the numbers, as floats
+        arr = arr.astype(_signed_as_float(arr.dtype))
     return _orient(arr, orientation), extra > 0
 
 
