@@ -117,12 +117,14 @@ _CONTENT = ("Macenko", "tissue", "transparent pixels", "expected an RGB image")
 def _refusal(ref: dict[str, Any], err: str) -> str:
     """'wrong' for a one-line refusal of an RGB TIFF a peer reads, else 'refused'.
 
-    A refusal of what the file holds (too little tissue, transparency, not RGB), of a file no
-    peer decodes, or of a format the command does not take (DICOM in chunked) is 'refused'.
+    A refusal of what the file holds (too little tissue, transparency, not RGB) or of a file no
+    peer decodes is 'refused'; an RGB DICOM slide (a total pixel matrix) that pydicom or
+    OpenSlide decodes counts as an RGB TIFF does (the chunked commands take DICOM slides).
     """
     if any(c in err for c in _CONTENT) or not ref.get("readable"):
         return "refused"
-    return "wrong" if ref["rgb"] and ref.get("tiff_rgb") is not None else "refused"
+    peer_read = ref.get("tiff_rgb") is not None or ref.get("dicom_total") is not None
+    return "wrong" if ref["rgb"] and peer_read else "refused"
 
 
 def _slow(sec: float, mpx: float) -> bool:
@@ -182,8 +184,15 @@ def _peer(path: Path) -> dict[str, Any]:
                      int(getattr(ds, "TotalPixelMatrixColumns", 0) or 0))  # fmt: skip
             ref["dicom_total"] = total if all(total) else None
             ref["dicom_sop"] = str(ds.SOPClassUID.name)
-            ref["levels"] = [total if all(total) else ref["dicom_size"]]
             ref["rgb"] = int(getattr(ds, "SamplesPerPixel", 1)) == 3
+            os_levels = ref["levels"] if ref.get("openslide") else None
+            ref["levels"] = [total if all(total) else ref["dicom_size"]]
+            if os_levels and ref["levels"][0] in os_levels:
+                # OpenSlide opens the whole series (its level 0 the largest file); this file
+                # is imageform's level 0, the series' smaller files its next levels
+                k = os_levels.index(ref["levels"][0])
+                ref["os_level"], ref["levels"] = k, os_levels[k:]
+            ref["mpp"] = _dicom_mpp(ds)  # this file's own Pixel Spacing
         except Exception as exc:
             ref["dicom_error"] = str(exc)[:80]
     try:
@@ -193,11 +202,62 @@ def _peer(path: Path) -> dict[str, Any]:
     return ref
 
 
+def _dicom_mpp(ds: Any) -> tuple[float, float] | None:
+    """A slide's pixel size in µm (x, y) from its Pixel Spacing (mm between rows, columns)."""
+    try:
+        groups = ds.SharedFunctionalGroupsSequence[0]
+        rows, cols = (float(v) for v in groups.PixelMeasuresSequence[0].PixelSpacing)
+    except Exception:
+        return None
+    return (1000 * cols, 1000 * rows) if rows > 0 and cols > 0 else None
+
+
+def _dicom_matrix(path: Path) -> np.ndarray | None:
+    """A slide's total pixel matrix put together here from pydicom's frames (the reference).
+
+    TILED_FULL frames row by row; with Per-frame Functional Groups, each frame at its Plane
+    Position (Slide) (1-based); gaps white (RGB). None for a file that is no tiled slide.
+    """
+    import pydicom
+    from pydicom.pixels import pixel_array
+
+    ds = pydicom.dcmread(path)
+    if str(ds.get("Modality", "")) != "SM" or int(ds.get("NumberOfFrames", 1) or 1) < 2:
+        return None
+    total_h, total_w = int(ds.TotalPixelMatrixRows), int(ds.TotalPixelMatrixColumns)
+    th, tw = int(ds.Rows), int(ds.Columns)
+    frames = np.asarray(pixel_array(ds))
+    out = np.full((total_h + th, total_w + tw, *frames.shape[3:]), 255, frames.dtype)
+    if str(ds.get("DimensionOrganizationType", "")) == "TILED_FULL":
+        across = -(-total_w // tw)
+        spots = [((k // across) * th, (k % across) * tw) for k in range(len(frames))]
+    else:
+        spots = []
+        for item in ds.PerFrameFunctionalGroupsSequence:
+            pos = item.PlanePositionSlideSequence[0]
+            spots.append((int(pos.RowPositionInTotalImagePixelMatrix) - 1,
+                          int(pos.ColumnPositionInTotalImagePixelMatrix) - 1))  # fmt: skip
+    for f, (r, c) in zip(frames, spots, strict=True):
+        out[r : r + th, c : c + tw] = f
+    return out[:total_h, :total_w]
+
+
 def _level0(path: Path, ref: dict[str, Any]) -> dict[str, np.ndarray]:
-    """Level 0 (at most a 2048 x 2048 corner) as tifffile, OpenSlide and tiffslide read it."""
+    """Level 0 (at most a 2048 x 2048 corner) as tifffile, OpenSlide and tiffslide read it.
+
+    A DICOM slide: as OpenSlide reads this file's level of its series, and as pydicom's
+    frames put together (:func:`_dicom_matrix`).
+    """
     out: dict[str, np.ndarray] = {}
     h, w = ref["levels"][0] if ref["levels"] else (0, 0)
     h, w = min(h, 2048), min(w, 2048)
+    if "dicom_size" in ref:
+        try:
+            m = _dicom_matrix(path)
+            if m is not None:
+                out["pydicom"] = m[:h, :w]
+        except Exception:
+            pass
     try:
         import tifffile
 
@@ -210,7 +270,8 @@ def _level0(path: Path, ref: dict[str, Any]) -> dict[str, np.ndarray]:
 
         try:
             with openslide.open_slide(str(path)) as s:
-                out["openslide"] = np.asarray(s.read_region((0, 0), 0, (w, h)))[..., :3]
+                k = int(ref.get("os_level", 0))
+                out["openslide"] = np.asarray(s.read_region((0, 0), k, (w, h)))[..., :3]
         except openslide.OpenSlideError:
             pass
     try:
@@ -323,7 +384,7 @@ def sweep_one(path: Path, target: Path, work: Path) -> dict[str, Any]:
         if a0 is not None:
             for name, theirs in _level0(path, ref).items():
                 h, w = theirs.shape[:2]
-                diff = _compare(a0[:h, :w], theirs, exact=name == "tifffile")
+                diff = _compare(a0[:h, :w], theirs, exact=name in ("tifffile", "pydicom"))
                 if diff is not None:
                     problems.append(f"level 0 vs {name}: {diff}")
         st = "wrong" if problems else ("slow" if _slow(sec, mpx) else "ok")

@@ -14,14 +14,15 @@ One rule for every format:
 - **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
   (float16 is widened to float32). A TIFF's signed integers (int8, int16, int32: a CT's or a
   microscope's numbers) come as floats holding each stored number exactly, float32 (float64
-  for int32), as a DICOM's signed samples do. Other sample types are refused. A TIFF's samples are read
-  as the values they mean: a palette through its colour map (RGB), a bilevel image as 0/255,
-  WhiteIsZero inverted; a CMYK TIFF as sRGB through its embedded CMYK ICC profile (LittleCMS,
-  8 and 16 bits; without one refused), a Lab or raw-YCbCr TIFF refused; a palette BMP or GIF as RGB,
-  a 1-bit BMP as 0/255; a CMYK JPEG as sRGB, through its embedded CMYK ICC profile (LittleCMS)
-  where it has one, else ``(1 - C)(1 - K)``. Samples of fewer bits than
-  their container (10, 12, 14 bits in uint16) come as stored, the sensor's numbers (DN), as
-  tifffile and scikit-image read them: measurements (``emva``, ``characterize``) need them so;
+  for int32), as a DICOM's signed samples do. Other sample types are refused. A TIFF's
+  samples are read as the values they mean: a palette through its colour map (RGB), a
+  bilevel image as 0/255, WhiteIsZero inverted; a CMYK TIFF as sRGB through its embedded
+  CMYK ICC profile (LittleCMS, 8 and 16 bits; without one refused), a Lab or raw-YCbCr TIFF
+  refused; a palette BMP or GIF as RGB, a 1-bit BMP as 0/255; a CMYK JPEG as sRGB, through
+  its embedded CMYK ICC profile (LittleCMS) where it has one, else ``(1 - C)(1 - K)``.
+  Samples of fewer bits than their container (10, 12, 14 bits in uint16) come as stored, the
+  sensor's numbers (DN), as tifffile and scikit-image read them: measurements (``emva``,
+  ``characterize``) need them so;
   such an image looks dark until scaled by ``65535 / (2**bits - 1)``.
 - **One image**: a TIFF holding a stack (pages, time points, z-planes) and an animated GIF or
   WebP are refused in one line saying what they hold and how to pick one, rather than read as
@@ -532,8 +533,9 @@ def image_frames(path: str | Path) -> ImageFrames:
     elif fmt == "dicom":
         from imageform.io import dicom
 
-        n = dicom.header(p, dicom.open_dicom(p, pixels=False)).frames
-        axes = (("frames", n),) if n > 1 else ()
+        head = dicom.open_dicom(p, pixels=False)
+        n = dicom.header(p, head).frames
+        axes = (("frames", n),) if n > 1 and dicom.slide_tiles(p, head) is None else ()
     elif fmt in ("gif", "webp"):
         try:
             with _pillow_open(p) as im:
@@ -745,7 +747,11 @@ def image_info(path: str | Path, *, frame: int | None = None) -> ImageInfo:
     if fmt == "dicom":
         from imageform.io import dicom
 
-        d = dicom.header(p, dicom.open_dicom(p, pixels=False))
+        head = dicom.open_dicom(p, pixels=False)
+        d = dicom.header(p, head)
+        tiles = dicom.slide_tiles(p, head)
+        if tiles is not None:  # a whole-slide image: its frames are tiles of one image
+            d = dicom.slide_info(d, tiles)
         if frame is not None:
             _check_frame(p, frame, d.frames)
         elif d.frames > 1:  # refused, as read_image refuses it
@@ -1253,7 +1259,7 @@ def _tiff_frame(series: Any, path: Path, frame: int | None) -> tuple[np.ndarray,
 
 
 def _signed_as_float(dtype: Any) -> np.dtype[Any]:
-    """The float type a TIFF's signed integer samples are read as: each number exactly.
+    """Return the float type a TIFF's signed integer samples are read as: each number exactly.
 
     float32 holds int8 and int16 exactly, float64 int32 (float32's 24-bit mantissa does
     not), as a DICOM's signed samples come as float32, float64 beyond 24 stored bits.
@@ -1524,7 +1530,7 @@ def read_image(
         arr = _read_heif(p, limit)
         has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     elif fmt == "dicom":
-        arr = _read_dicom(p, limit, frame)
+        arr = _read_dicom(p, limit, frame, whole=True)
     elif fmt == "netpbm":
         arr, has_alpha = _read_netpbm(p, limit)
     elif fmt == "pfm":
@@ -1545,13 +1551,15 @@ def read_image(
     return _normalise(p, arr, alpha, has_alpha)
 
 
-def _read_dicom(p: Path, limit: int, frame: object = None, window: Any = None) -> np.ndarray:
+def _read_dicom(
+    p: Path, limit: int, frame: object = None, window: Any = None, whole: bool = False
+) -> np.ndarray:
     from imageform.io import dicom
 
     def check(info: Any) -> None:
         _check_pixels(p, ImageInfo(info.width, info.height, info.channels, info.dtype, ""), limit)
 
-    return dicom.read(p, check, frame=frame, window=window)
+    return dicom.read(p, check, frame=frame, window=window, whole=whole)
 
 
 def read_dicom(

@@ -17,11 +17,13 @@ from imageform.errors import InvalidInputError
 from imageform.workflows._spec import Options, Run, option
 
 __all__ = [
+    "FRAME_HELP",
     "OPTS_FRAME",
     "ImageIn",
     "ImageOut",
     "OnDevice",
     "RgbFrom",
+    "frame_option",
     "gpu_bands",
     "image_out_renames",
     "in_srgb",
@@ -43,6 +45,24 @@ OutOfRange = Literal["clip", "error"]
 Device = Literal["cpu", "cuda"]
 
 
+#: What ``--frame`` picks, for every command that reads image files.
+FRAME_HELP = (
+    "The image to read of a file holding several: a TIFF stack's (pages, z-planes, time "
+    "points, channels), a multi-frame DICOM's, an animated GIF's or WebP's; 0 the first "
+    "(imageform info lists them)."
+)
+
+
+def frame_option(help: str = FRAME_HELP) -> Any:
+    """Return the ``--frame N`` option: one image of a file that holds several, 0 the first.
+
+    Declared once here, for :class:`ImageIn` (every command that reads image files) and
+    ``imageform info`` (whose help adds that it lists them without it): one metavar, one
+    minimum (``--frame -1`` is a usage error), one default (None: a file of one image).
+    """
+    return option(None, help=help, metavar="N", minimum=0)
+
+
 @dataclass(frozen=True, kw_only=True)
 class ImageIn(Options):
     """How input images are read."""
@@ -57,14 +77,7 @@ class ImageIn(Options):
         help="Refuse input images with more pixels (default 100 Mpx, or IMAGEFORM_MAX_PIXELS).",
         metavar="N",
     )
-    frame: int | None = option(
-        None,
-        help="The image to read of a file holding several: a TIFF stack's (pages, z-planes, "
-        "time points, channels), a multi-frame DICOM's, an animated GIF's or WebP's; 0 the "
-        "first (imageform info lists them).",
-        metavar="N",
-        minimum=0,
-    )
+    frame: int | None = frame_option()
 
 
 @dataclass(frozen=True, kw_only=True)

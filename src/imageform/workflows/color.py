@@ -18,6 +18,7 @@ from imageform.workflows._images import (
     RgbFrom,
     as_values,
     declared_space,
+    frame_option,
     gpu_bands,
     image_out_renames,
     input_space,
@@ -173,6 +174,7 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
         "file's window, else its VOI LUT, else its min to max) or CENTER,WIDTH (e.g. 40,400).",
         metavar="auto|C,W",
     )
+
     def check(self) -> None:
         """Check the options and normalise the ``--from`` and ``--to`` space names."""
         super().check()
@@ -358,7 +360,9 @@ def _refuse_unwindowed(image: Path, img: Any, frame: int | None) -> None:
             f"{image} holds {signed} samples (signed numbers, {lo:.6g} to {hi:.6g}: a "
             "detector's or a CT's values, not colours); scale them to [0, 1] first"
         )
-    if (lo < 0 or hi > 1) and (_is_dicom(image) or image_info(image, frame=frame).format == "dicom"):
+    if (lo < 0 or hi > 1) and (
+        _is_dicom(image) or image_info(image, frame=frame).format == "dicom"
+    ):
         raise InvalidInputError(
             f"{image} holds DICOM values from {lo:.6g} to {hi:.6g} (its Modality LUT's output, "
             "not colours); pass --window auto (its VOI window) or --window CENTER,WIDTH"
@@ -614,7 +618,9 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
         )
 
         # the estimate reads the whole image on the CPU; the gains are applied on the device
-        keep = white_balance_mask(img, opts.mask, image, lambda p: read(p, opts, colours=True, frame=None))
+        keep = white_balance_mask(
+            img, opts.mask, image, lambda p: read(p, opts, colours=True, frame=None)
+        )
         gains = np.asarray(
             white_balance_gains(
                 img, opts.method, transfer=transfer, space=space, mask=keep, **opts.params()
@@ -907,12 +913,9 @@ _IMG = Input(
 class InfoOptions(Options):
     """Options of ``imageform info``."""
 
-    frame: int | None = option(
-        None,
-        help="Describe this image of a file holding several (a TIFF stack's page, z-plane, time "
-        "point or channel; a GIF's or WebP's frame), 0 the first; without it they are listed.",
-        metavar="N",
-        minimum=0,
+    frame: int | None = frame_option(
+        "Describe this image of a file holding several (a TIFF stack's page, z-plane, time "
+        "point or channel; a GIF's or WebP's frame), 0 the first; without it they are listed."
     )
 
 
@@ -1109,18 +1112,20 @@ def _is_dicom(image: Path) -> bool:
 
 def _dicom_info(image: Path) -> Result:
     """``imageform info`` of a DICOM file: the image, its modality values, window, spacing."""
-    from imageform.io import dicom_info, image_color_space
+    from imageform.io import dicom, dicom_info, image_color_space
 
     d = dicom_info(image)
+    tiles = dicom.slide_tiles(Path(image), dicom.open_dicom(Path(image), pixels=False))
+    w, h = (d.width, d.height) if tiles is None else (tiles.width, tiles.height)
     declared = image_color_space(image)
     summary: dict[str, Any] = {
         "image": image,
         "format": "dicom",
-        "width": d.width,
-        "height": d.height,
+        "width": w,
+        "height": h,
         "channels": d.channels,
         "dtype": d.dtype,
-        "megapixels": round(d.width * d.height / 1e6, 3),
+        "megapixels": round(w * h / 1e6, 3),
         "color_space": declared.name,
         "color_space_source": declared.source,
         "description": declared.description or None,
@@ -1128,9 +1133,15 @@ def _dicom_info(image: Path) -> Result:
         "dicom": d._asdict(),
     }
     frames = f", {d.frames} frames (read one: --frame N)" if d.frames > 1 else ""
+    if tiles is not None:
+        summary["tiles"] = {"count": d.frames, "organization": tiles.organization}
+        frames = (
+            f" (a {tiles.organization} slide of {d.frames} tiles of {d.width} x {d.height} px, "
+            "read as one image)"
+        )
     signed = "signed" if d.signed else "unsigned"
     text = [
-        f"{image}: dicom, {d.width} x {d.height} px, {d.channels} channel(s), {d.dtype}{frames}",
+        f"{image}: dicom, {w} x {h} px, {d.channels} channel(s), {d.dtype}{frames}",
         f"modality {d.modality or 'not given'}, {d.photometric}, {d.bits_stored} of "
         f"{d.bits_allocated} bits stored ({signed}), {d.transfer_syntax}",
     ]
@@ -1178,21 +1189,19 @@ def _dicom_slide(image: Path, d: Any) -> dict[str, Any]:
 
     if d.modality != "SM":
         return {}
-    import pydicom
+    from imageform.io import dicom
 
     try:
-        ds = pydicom.dcmread(image, stop_before_pixels=True)
-        total = (int(ds.get("TotalPixelMatrixColumns", 0) or 0),
-                 int(ds.get("TotalPixelMatrixRows", 0) or 0))  # fmt: skip
+        levels = [[w, h] for _, w, h in dicom.slide_levels(Path(image))]
     except Exception:  # dicom_info read it already; an odd attribute says nothing more
-        total = (0, 0)
+        levels = []
     um = pixel_size_um(image)
     out: dict[str, Any] = {
         "vendor": "dicom",
         "pixel_size_um": None if um is None else [round(float(v), 6) for v in um],
     }
-    if all(total):
-        out["levels"] = [list(total)]
+    if levels:
+        out["levels"] = levels
         out["tile"] = [d.width, d.height]
     return out
 

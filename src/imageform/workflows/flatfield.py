@@ -184,7 +184,11 @@ def _read_mask(path: Path, opts: FlatfieldOptions, shape: tuple[int, ...]) -> An
     if not path.is_file():
         raise InvalidInputError(f"--mask {path} does not exist (give auto or a mask image)")
     return mask_of(
-        _read(path, opts, own=False), path, shape[0], shape[1], "the images",
+        _read(path, opts, own=False),
+        path,
+        shape[0],
+        shape[1],
+        "the images",
         "no pixel would count",
     )
 
