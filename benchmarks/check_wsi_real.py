@@ -185,6 +185,11 @@ def _peer(path: Path) -> dict[str, Any]:
             ref["dicom_total"] = total if all(total) else None
             ref["dicom_sop"] = str(ds.SOPClassUID.name)
             ref["rgb"] = int(getattr(ds, "SamplesPerPixel", 1)) == 3
+            kind = [str(v).upper() for v in (ds.get("ImageType", None) or [])]
+            if len(kind) > 2 and kind[2] != "VOLUME":
+                # a thumbnail, label or overview: OpenSlide reads its series' VOLUME levels
+                # (another file) in its place, so it is no reference for this one
+                ref["openslide"] = False
             os_levels = ref["levels"] if ref.get("openslide") else None
             ref["levels"] = [total if all(total) else ref["dicom_size"]]
             if os_levels and ref["levels"][0] in os_levels:

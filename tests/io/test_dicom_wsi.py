@@ -186,3 +186,27 @@ def test_chunked_convert_of_a_slide_keeps_its_levels_and_pixel_size(tmp_path: Pa
         np.testing.assert_array_equal(tf.series[0].asarray(), m)
     assert levels == [(64, 96), (32, 48)]
     assert pixel_size_um(out) == pytest.approx((0.25, 0.5))
+
+
+def test_a_slide_that_states_no_layout_keeps_its_frames(tmp_path: Path) -> None:
+    """pathml's small_dicom.dcm (tuning half) has 42 tiles and neither TILED_FULL nor plane
+    positions; its tiles run column by column, so row-major placing scrambled them. A layout
+    the file does not state is not guessed: it is a multi-frame file, a frame a tile."""
+    m = _matrix(32, 48)
+    p = _slide(tmp_path / "bare.dcm", m)
+    ds = pydicom.dcmread(p)
+    del ds.DimensionOrganizationType
+    ds.save_as(p)
+    assert image_frames(p).total == 6
+    with pytest.raises(InvalidInputError, match=r"multi-frame DICOM of 6 frames"):
+        read_image(p)
+    np.testing.assert_array_equal(read_image(p, frame=1), m[:16, 16:32])
+
+
+def test_one_frame_larger_than_its_matrix_is_cut_to_it(tmp_path: Path) -> None:
+    """OpenSlide's boxes_0.dcm (tuning half): one 64 x 64 JPEG frame of a 16 x 16 matrix was
+    read as 64 x 64 (OpenSlide: 16 x 16)."""
+    m = _matrix(10, 12)
+    p = _slide(tmp_path / "one.dcm", m)  # one 16 x 16 frame, padded
+    np.testing.assert_array_equal(read_image(p), m)
+    assert image_info(p)[:2] == (12, 10)

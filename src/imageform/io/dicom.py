@@ -661,7 +661,8 @@ class SlideTiles(NamedTuple):
 def slide_tiles(p: Path, ds: Any) -> SlideTiles | None:
     """Return the tile layout of a slide image (Modality SM with a total pixel matrix).
 
-    None for anything else, a single-frame image whose frame is the whole matrix included.
+    None for anything else: a single-frame image, and a multi-frame one that states no layout
+    (neither TILED_FULL nor the frames' plane positions), whose frames stay frames.
     A slide of several focal planes or optical paths is refused in one line (imageform
     reads one image: a plane's would need choosing), and so is a layout whose frames do not
     fill their places (a TILED_FULL count other than its tiles', a position off the matrix).
@@ -676,8 +677,10 @@ def slide_tiles(p: Path, ds: Any) -> SlideTiles | None:
         paths = int(ds.get("NumberOfOpticalPaths", 1) or 1)
     except (TypeError, ValueError, AttributeError) as exc:
         raise UnreadableFileError(p, f"corrupt slide header ({_one_line(exc)})") from None
-    if frames == 1:
+    if frames == 1 and (width > tw or height > th or (width, height) == (tw, th)):
         return None  # one frame: the image, as read before
+    # one frame larger than the matrix (OpenSlide's boxes_0.dcm: a 64 x 64 JPEG frame of a
+    # 16 x 16 matrix) is a TILED_FULL slide of one tile, cut to the matrix
     if min(width, height, tw, th) < 1:
         raise UnreadableFileError(p, f"a slide of {width} x {height} px in tiles of {tw} x {th}")
     organization = str(ds.get("DimensionOrganizationType", "") or "").strip().upper()
@@ -689,7 +692,12 @@ def slide_tiles(p: Path, ds: Any) -> SlideTiles | None:
         )
     across, down = -(-width // tw), -(-height // th)
     per_frame = ds.get("PerFrameFunctionalGroupsSequence", None)
-    if organization == "TILED_FULL" or (per_frame is None and frames == across * down):
+    stated = per_frame is not None and any("PlanePositionSlideSequence" in i for i in per_frame)
+    if organization != "TILED_FULL" and not stated:
+        # no layout stated: frames of their own (pathml's small_dicom.dcm has its tiles
+        # column by column, which row-major TILED_FULL would scramble), read by --frame
+        return None
+    if organization == "TILED_FULL":
         if frames != across * down:
             raise UnreadableFileError(
                 p,
