@@ -210,3 +210,19 @@ def test_one_frame_larger_than_its_matrix_is_cut_to_it(tmp_path: Path) -> None:
     p = _slide(tmp_path / "one.dcm", m)  # one 16 x 16 frame, padded
     np.testing.assert_array_equal(read_image(p), m)
     assert image_info(p)[:2] == (12, 10)
+
+
+def test_chunked_refuses_a_multi_frame_file_that_is_no_slide(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The chunked reader took a multi-frame file of no stated layout for its first frame."""
+    pytest.importorskip("dask")
+    p = _slide(tmp_path / "bare.dcm", _matrix(32, 48))
+    ds = pydicom.dcmread(p)
+    del ds.DimensionOrganizationType
+    ds.save_as(p)
+    out = tmp_path / "o.tif"
+    assert main(["chunked", "convert", str(p), "-o", str(out), "--to", "srgb"]) == 1
+    err = capsys.readouterr().err
+    assert "a multi-frame DICOM of 6 frames" in err and err.count("\n") == 1
+    assert not out.exists()

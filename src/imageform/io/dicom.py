@@ -799,6 +799,8 @@ class SlideLevel:
         head = open_dicom(p, pixels=False)
         info = header(p, head)
         tiles = slide_tiles(p, head)
+        if tiles is None and info.frames > 1:  # frames of their own: no one image to read
+            raise multi_frame(p, info)
         if tiles is None:
             tiles = SlideTiles(info.width, info.height, (info.width, info.height), ((0, 0),), "")
         self.path, self.info, self.tiles = p, info, tiles
