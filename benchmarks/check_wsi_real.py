@@ -4,15 +4,22 @@ For each file of a folder (Aperio SVS, Hamamatsu NDPI, generic tiled and pyramid
 OME-TIFF, DICOM slide microscopy, QPTIFF, ...), in a fresh process each:
 
 - ``imageform info FILE --json``: level 0's size against OpenSlide's (or tifffile's series 0,
-  or pydicom's rows/columns), and whether it reports the pyramid levels, the pixel size in
-  µm and the scanner's format where OpenSlide (``openslide.mpp-x``, ``openslide.vendor``)
-  knows them;
+  or pydicom's total pixel matrix, else rows/columns), and whether it reports the pyramid
+  levels, the pixel size in µm and the scanner's format where OpenSlide
+  (``openslide.mpp-x``, ``openslide.vendor``) knows them. A DICOM slide's levels are
+  OpenSlide's levels of its series from this file's size down (OpenSlide opens the series;
+  imageform takes the file given as level 0), its pixel size its own Pixel Spacing's, and
+  a THUMBNAIL, LABEL or OVERVIEW file has no OpenSlide reference (OpenSlide reads its
+  series' VOLUME level in its place);
 - ``imageform chunked convert FILE -o OUT.tif --from srgb --to srgb --compression none``:
   the output is a TIFF tifffile reads, with the input's stored levels (tifffile's; OpenSlide
   adds levels of its own to NDPI, from JPEG's scaled decoding), the input's pixel size
   (``imageform.io.pixel_size_um`` of the output against OpenSlide's MPP), and level 0 equal
   to the input read by tifffile (exactly) and by OpenSlide / tiffslide (JPEG decoders may
   differ by a code or two: mean |difference| at most 1 code, 99.9th percentile at most 8);
+  a DICOM slide's level 0 equal to pydicom's frames put together here (exactly:
+  TILED_FULL row by row, else at each frame's plane position) and within those codes of
+  OpenSlide's;
 - ``imageform chunked stain-normalize FILE -o OUT.tif --target TARGET``: output valid,
   levels and pixel size as for convert; time per megapixel;
 - ``imageform stain-normalize FILE -o OUT.png --target TARGET`` (in memory);
@@ -21,19 +28,22 @@ OME-TIFF, DICOM slide microscopy, QPTIFF, ...), in a fresh process each:
   told that level's pixel size (**missing** where imageform had no way to read a level).
 
 A step is **crash** when the command printed a traceback or an "unexpected" error; **wrong**
-when it ran and a check above failed, or refused an RGB TIFF that tifffile, OpenSlide or
-tiffslide decodes; **slow** when it took over 10 s and under 0.5 Mpx/s on 1 Mpx or more; a
-one-line refusal of what the file holds (not RGB, transparent, too little tissue for
-Macenko), of a file no peer decodes, or of a format the command does not take (DICOM in
-chunked) is **refused**.
+when it ran and a check above failed, or refused an RGB TIFF or RGB DICOM slide that
+tifffile, pydicom (put together), OpenSlide or tiffslide decodes (a DICOM slide in chunked
+counted as **refused** before the chunked commands took DICOM, 2026-11-30j); **slow** when
+it took over 10 s and under 0.5 Mpx/s on 1 Mpx or more; a one-line refusal of what the
+file holds (not RGB, transparent, too little tissue for Macenko) or of a file no peer
+decodes is **refused**.
 
 Data (split by repository before any run; the held-out files' SHA-256 are in the results):
-tuning from openslide/openslide-python (c63ac05b, LGPL-2.1 test fixtures),
-Booritas/slideio-tutorial (67cb126e, BSD-3-Clause: OpenSlide's CMU-1-Small-Region.svs,
-Manuel Stritt's NDPI files under CC-BY 4.0) and girder/large_image (ebff6109, Apache-2.0);
-held-out from
-Dana-Farber-AIOS/pathml (fa49ffb6, GPL-2.0), ImagingDataCommons/highdicom (49728738, MIT)
-and libvips/libvips (29fd1202, LGPL-2.1). The files stay outside the repository.
+2026-11-30k (DICOM slides): tuning on the 11 DICOM files of the 2026-11-30j sweep, all
+seen (ImagingDataCommons/highdicom 49728738, MIT; Dana-Farber-AIOS/pathml fa49ffb6,
+GPL-2.0; libvips/libvips 29fd1202, LGPL-2.1; openslide/openslide-python c63ac05b, LGPL-2.1;
+Booritas/slideio-tutorial 67cb126e, BSD-3-Clause); held-out: the 12 files of one 12-level
+DICOM pyramid of OpenSlide's CMU-1-Small-Region (Google's WSI-to-DICOM converter) in
+jcupitt/dicom-wsi-sample (9926a34d), which nobody here had used. 2026-11-30j: tuning from
+openslide-python, slideio-tutorial and girder/large_image (ebff6109, Apache-2.0), held-out
+from pathml, highdicom and libvips. The files stay outside the repository.
 
 Usage::
 
