@@ -459,8 +459,11 @@ def sweep_one(path: Path, target: Path, work: Path) -> dict[str, Any]:
     return row
 
 
-def _compose(sums: Path, tables: list[Path]) -> str:
-    """The results file: what ran, the held-out files' SHA-256, the runs' tables."""
+def _compose(sums: Path, tables: list[Path], findings: Path | None = None) -> str:
+    """The results file: what ran, the held-out files' SHA-256, the runs' tables.
+
+    ``findings``: a text of what the runs showed, printed after the summary.
+    """
     import platform
 
     import openslide
@@ -491,6 +494,8 @@ def _compose(sums: Path, tables: list[Path]) -> str:
         summary.append(f"| {lines[0].lstrip('# ')} | {steps[len('Steps: ') :]} |")
     head += ["Summary (steps of 5 per file: crash / wrong / slow / missing / refused / ok):", ""]
     head += [*summary, ""]
+    if findings is not None:
+        head += [findings.read_text().strip(), ""]
     body = [t.read_text().strip() + "\n" for t in tables]
     return "\n".join(head) + "\n" + "\n".join(body)
 
@@ -503,6 +508,7 @@ def main() -> None:
     ap.add_argument("--title", default="")
     ap.add_argument("--one", help="run one file, print its row as JSON (internal)")
     ap.add_argument("--src", type=Path, help="the imageform source folder whose commands run")
+    ap.add_argument("--findings", type=Path, help="--compose: what the runs showed (Markdown)")
     ap.add_argument(
         "--compose",
         nargs="+",
@@ -512,7 +518,7 @@ def main() -> None:
     )
     args = ap.parse_args()
     if args.compose:
-        print(_compose(args.compose[0], args.compose[1:]))
+        print(_compose(args.compose[0], args.compose[1:], args.findings))
         return
     if args.src:
         CLI_ENV["PYTHONPATH"] = str(args.src.resolve())

@@ -226,3 +226,22 @@ def test_chunked_refuses_a_multi_frame_file_that_is_no_slide(
     err = capsys.readouterr().err
     assert "a multi-frame DICOM of 6 frames" in err and err.count("\n") == 1
     assert not out.exists()
+
+
+def test_chunked_stain_normalize_measures_a_dicom_slide_on_its_smaller_level(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The held-out pyramid (jcupitt/dicom-wsi-sample) was refused: the statistics' level was
+    opened as a TIFF ("pyramid level 1 cannot be decoded (TiffFileError ...)")."""
+    tifffile = pytest.importorskip("tifffile")
+    pytest.importorskip("dask")
+    p, m, _ = _pyramid(tmp_path)
+    target = tmp_path / "target.png"
+    from imageform.io import write_image
+
+    write_image(target, m)
+    out = tmp_path / "sn.tif"
+    argv = ["chunked", "stain-normalize", str(p), "-o", str(out), "--target", str(target)]
+    assert main([*argv, "--method", "reinhard", "--stats-from", "level", "--json"]) == 0
+    assert "pyramid level 1 (48 x 32)" in capsys.readouterr().out
+    assert tifffile.imread(out).shape == m.shape
