@@ -20,6 +20,10 @@ the table prints and checks) goes through
 - ``frame 0``: ``convert --frame 0 --to lab`` (TIFF): a file of several images (a TIFF
   stack, an animated GIF) converts its first; a file of one image the same Lab as
   ``convert``'s (to 1e-6);
+- ``frame last``: ``cvd --frame N --type deutan`` (PNG) with ``N`` the last image ``info``
+  lists (0 for a file of one image): the size of that image;
+- ``info cut``: ``info`` of a copy of a PFM or Radiance HDR cut to 60 % of its bytes: one
+  line saying it is short (``fine`` on a cut file is **wrong**); skipped for other formats;
 - ``batch convert 'FOLDER/*' --to lab``, once for the folder (its own temporary folder must
   stay empty): each file's Lab checked as ``convert``'s, and the same outcome;
 - ``bad options``: ``convert --to nonsense`` and ``white-balance --method nonsense``: exit 2,
@@ -80,6 +84,8 @@ CLASSES = (
     "batch convert",
     "chunked convert",
     "frame 0",
+    "frame last",
+    "info cut",
     "bad options",
 )
 
@@ -192,6 +198,9 @@ def sweep_file(path: Path) -> list[dict[str, Any]]:
             except Exception:
                 v, n = "wrong", "--json printed no JSON"
         add("info", v, n, sec)
+        frames = 1
+        if v == "fine":
+            frames = int(json.loads(so).get("frames") or 1)
 
         lab = out / "lab.tif"
         v, n, sec, _ = _step(["convert", s, "--to", "lab", "-o", str(lab)])
@@ -261,6 +270,38 @@ def sweep_file(path: Path) -> list[dict[str, Any]]:
             if a.shape != b.shape or not np.allclose(a, b, atol=1e-6, equal_nan=True):
                 v, n = "wrong", "--frame 0 of a file of one image differs from convert's"
         add("frame 0", v, n, sec, first)
+
+        last = out / "last.png"
+        argv = ["cvd", s, "--frame", str(frames - 1), "--type", "deutan", "-o", str(last)]
+        v, n, sec, _ = _step(argv)
+        if v == "fine":
+            try:
+                want = read_image(path, frame=frames - 1, alpha="drop", max_pixels=10**9)
+                got = read_image(last, alpha="drop").shape[:2]
+                if got != want.shape[:2]:
+                    v, n = "wrong", f"{last.name} is {got}, frame {frames - 1} {want.shape[:2]}"
+                else:
+                    n = f"frame {frames - 1} of {frames}"
+            except Exception as exc:
+                v, n = "wrong", f"cvd read what read_image refuses: {str(exc)[:100]}"
+        hw_all = hw
+        hw = None  # the frame's size is checked above (a stack has no upright size)
+        add("frame last", v, n, sec, last)
+        hw = hw_all
+
+        head16 = path.read_bytes()[:16]
+        if head16[:2] in (b"PF", b"Pf") or head16.startswith((b"#?RADIANCE", b"#?RGBE")):
+            cut = out / f"cut{path.suffix}"
+            data = path.read_bytes()
+            cut.write_bytes(data[: int(len(data) * 0.6)])
+            v, n, sec, _ = _step(["info", str(cut)])
+            if v == "fine":
+                v, n = "wrong", "info of a file cut to 60 % passed"
+            elif v == "error":
+                v, n = "fine", f"refused: {n}"
+            add("info cut", v, n, sec)
+        else:
+            add("info cut", "skipped", "not PFM or HDR", 0.0)
 
         bad = out / "bad.png"
         v1, n1, sec1, _ = _step(["convert", s, "--to", "nonsense", "-o", str(bad)])

@@ -4,15 +4,22 @@ For each file of a folder (Aperio SVS, Hamamatsu NDPI, generic tiled and pyramid
 OME-TIFF, DICOM slide microscopy, QPTIFF, ...), in a fresh process each:
 
 - ``imageform info FILE --json``: level 0's size against OpenSlide's (or tifffile's series 0,
-  or pydicom's rows/columns), and whether it reports the pyramid levels, the pixel size in
-  µm and the scanner's format where OpenSlide (``openslide.mpp-x``, ``openslide.vendor``)
-  knows them;
+  or pydicom's total pixel matrix, else rows/columns), and whether it reports the pyramid
+  levels, the pixel size in µm and the scanner's format where OpenSlide
+  (``openslide.mpp-x``, ``openslide.vendor``) knows them. A DICOM slide's levels are
+  OpenSlide's levels of its series from this file's size down (OpenSlide opens the series;
+  imageform takes the file given as level 0), its pixel size its own Pixel Spacing's, and
+  a THUMBNAIL, LABEL or OVERVIEW file has no OpenSlide reference (OpenSlide reads its
+  series' VOLUME level in its place);
 - ``imageform chunked convert FILE -o OUT.tif --from srgb --to srgb --compression none``:
   the output is a TIFF tifffile reads, with the input's stored levels (tifffile's; OpenSlide
   adds levels of its own to NDPI, from JPEG's scaled decoding), the input's pixel size
   (``imageform.io.pixel_size_um`` of the output against OpenSlide's MPP), and level 0 equal
   to the input read by tifffile (exactly) and by OpenSlide / tiffslide (JPEG decoders may
   differ by a code or two: mean |difference| at most 1 code, 99.9th percentile at most 8);
+  a DICOM slide's level 0 equal to pydicom's frames put together here (exactly:
+  TILED_FULL row by row, else at each frame's plane position) and within those codes of
+  OpenSlide's;
 - ``imageform chunked stain-normalize FILE -o OUT.tif --target TARGET``: output valid,
   levels and pixel size as for convert; time per megapixel;
 - ``imageform stain-normalize FILE -o OUT.png --target TARGET`` (in memory);
@@ -21,19 +28,22 @@ OME-TIFF, DICOM slide microscopy, QPTIFF, ...), in a fresh process each:
   told that level's pixel size (**missing** where imageform had no way to read a level).
 
 A step is **crash** when the command printed a traceback or an "unexpected" error; **wrong**
-when it ran and a check above failed, or refused an RGB TIFF that tifffile, OpenSlide or
-tiffslide decodes; **slow** when it took over 10 s and under 0.5 Mpx/s on 1 Mpx or more; a
-one-line refusal of what the file holds (not RGB, transparent, too little tissue for
-Macenko), of a file no peer decodes, or of a format the command does not take (DICOM in
-chunked) is **refused**.
+when it ran and a check above failed, or refused an RGB TIFF or RGB DICOM slide that
+tifffile, pydicom (put together), OpenSlide or tiffslide decodes (a DICOM slide in chunked
+counted as **refused** before the chunked commands took DICOM, 2026-11-30j); **slow** when
+it took over 10 s and under 0.5 Mpx/s on 1 Mpx or more; a one-line refusal of what the
+file holds (not RGB, transparent, too little tissue for Macenko) or of a file no peer
+decodes is **refused**.
 
 Data (split by repository before any run; the held-out files' SHA-256 are in the results):
-tuning from openslide/openslide-python (c63ac05b, LGPL-2.1 test fixtures),
-Booritas/slideio-tutorial (67cb126e, BSD-3-Clause: OpenSlide's CMU-1-Small-Region.svs,
-Manuel Stritt's NDPI files under CC-BY 4.0) and girder/large_image (ebff6109, Apache-2.0);
-held-out from
-Dana-Farber-AIOS/pathml (fa49ffb6, GPL-2.0), ImagingDataCommons/highdicom (49728738, MIT)
-and libvips/libvips (29fd1202, LGPL-2.1). The files stay outside the repository.
+2026-11-30k (DICOM slides): tuning on the 11 DICOM files of the 2026-11-30j sweep, all
+seen (ImagingDataCommons/highdicom 49728738, MIT; Dana-Farber-AIOS/pathml fa49ffb6,
+GPL-2.0; libvips/libvips 29fd1202, LGPL-2.1; openslide/openslide-python c63ac05b, LGPL-2.1;
+Booritas/slideio-tutorial 67cb126e, BSD-3-Clause); held-out: the 12 files of one 12-level
+DICOM pyramid of OpenSlide's CMU-1-Small-Region (Google's WSI-to-DICOM converter) in
+jcupitt/dicom-wsi-sample (9926a34d), which nobody here had used. 2026-11-30j: tuning from
+openslide-python, slideio-tutorial and girder/large_image (ebff6109, Apache-2.0), held-out
+from pathml, highdicom and libvips. The files stay outside the repository.
 
 Usage::
 
@@ -117,12 +127,14 @@ _CONTENT = ("Macenko", "tissue", "transparent pixels", "expected an RGB image")
 def _refusal(ref: dict[str, Any], err: str) -> str:
     """'wrong' for a one-line refusal of an RGB TIFF a peer reads, else 'refused'.
 
-    A refusal of what the file holds (too little tissue, transparency, not RGB), of a file no
-    peer decodes, or of a format the command does not take (DICOM in chunked) is 'refused'.
+    A refusal of what the file holds (too little tissue, transparency, not RGB) or of a file no
+    peer decodes is 'refused'; an RGB DICOM slide (a total pixel matrix) that pydicom or
+    OpenSlide decodes counts as an RGB TIFF does (the chunked commands take DICOM slides).
     """
     if any(c in err for c in _CONTENT) or not ref.get("readable"):
         return "refused"
-    return "wrong" if ref["rgb"] and ref.get("tiff_rgb") is not None else "refused"
+    peer_read = ref.get("tiff_rgb") is not None or ref.get("dicom_total") is not None
+    return "wrong" if ref["rgb"] and peer_read else "refused"
 
 
 def _slow(sec: float, mpx: float) -> bool:
@@ -182,8 +194,20 @@ def _peer(path: Path) -> dict[str, Any]:
                      int(getattr(ds, "TotalPixelMatrixColumns", 0) or 0))  # fmt: skip
             ref["dicom_total"] = total if all(total) else None
             ref["dicom_sop"] = str(ds.SOPClassUID.name)
-            ref["levels"] = [total if all(total) else ref["dicom_size"]]
             ref["rgb"] = int(getattr(ds, "SamplesPerPixel", 1)) == 3
+            kind = [str(v).upper() for v in (ds.get("ImageType", None) or [])]
+            if len(kind) > 2 and kind[2] != "VOLUME":
+                # a thumbnail, label or overview: OpenSlide reads its series' VOLUME levels
+                # (another file) in its place, so it is no reference for this one
+                ref["openslide"] = False
+            os_levels = ref["levels"] if ref.get("openslide") else None
+            ref["levels"] = [total if all(total) else ref["dicom_size"]]
+            if os_levels and ref["levels"][0] in os_levels:
+                # OpenSlide opens the whole series (its level 0 the largest file); this file
+                # is imageform's level 0, the series' smaller files its next levels
+                k = os_levels.index(ref["levels"][0])
+                ref["os_level"], ref["levels"] = k, os_levels[k:]
+            ref["mpp"] = _dicom_mpp(ds)  # this file's own Pixel Spacing
         except Exception as exc:
             ref["dicom_error"] = str(exc)[:80]
     try:
@@ -193,11 +217,62 @@ def _peer(path: Path) -> dict[str, Any]:
     return ref
 
 
+def _dicom_mpp(ds: Any) -> tuple[float, float] | None:
+    """A slide's pixel size in µm (x, y) from its Pixel Spacing (mm between rows, columns)."""
+    try:
+        groups = ds.SharedFunctionalGroupsSequence[0]
+        rows, cols = (float(v) for v in groups.PixelMeasuresSequence[0].PixelSpacing)
+    except Exception:
+        return None
+    return (1000 * cols, 1000 * rows) if rows > 0 and cols > 0 else None
+
+
+def _dicom_matrix(path: Path) -> np.ndarray | None:
+    """A slide's total pixel matrix put together here from pydicom's frames (the reference).
+
+    TILED_FULL frames row by row; with Per-frame Functional Groups, each frame at its Plane
+    Position (Slide) (1-based); gaps white (RGB). None for a file that is no tiled slide.
+    """
+    import pydicom
+    from pydicom.pixels import pixel_array
+
+    ds = pydicom.dcmread(path)
+    if str(ds.get("Modality", "")) != "SM" or int(ds.get("NumberOfFrames", 1) or 1) < 2:
+        return None
+    total_h, total_w = int(ds.TotalPixelMatrixRows), int(ds.TotalPixelMatrixColumns)
+    th, tw = int(ds.Rows), int(ds.Columns)
+    frames = np.asarray(pixel_array(ds))
+    out = np.full((total_h + th, total_w + tw, *frames.shape[3:]), 255, frames.dtype)
+    if str(ds.get("DimensionOrganizationType", "")) == "TILED_FULL":
+        across = -(-total_w // tw)
+        spots = [((k // across) * th, (k % across) * tw) for k in range(len(frames))]
+    else:
+        spots = []
+        for item in ds.PerFrameFunctionalGroupsSequence:
+            pos = item.PlanePositionSlideSequence[0]
+            spots.append((int(pos.RowPositionInTotalImagePixelMatrix) - 1,
+                          int(pos.ColumnPositionInTotalImagePixelMatrix) - 1))  # fmt: skip
+    for f, (r, c) in zip(frames, spots, strict=True):
+        out[r : r + th, c : c + tw] = f
+    return out[:total_h, :total_w]
+
+
 def _level0(path: Path, ref: dict[str, Any]) -> dict[str, np.ndarray]:
-    """Level 0 (at most a 2048 x 2048 corner) as tifffile, OpenSlide and tiffslide read it."""
+    """Level 0 (at most a 2048 x 2048 corner) as tifffile, OpenSlide and tiffslide read it.
+
+    A DICOM slide: as OpenSlide reads this file's level of its series, and as pydicom's
+    frames put together (:func:`_dicom_matrix`).
+    """
     out: dict[str, np.ndarray] = {}
     h, w = ref["levels"][0] if ref["levels"] else (0, 0)
     h, w = min(h, 2048), min(w, 2048)
+    if "dicom_size" in ref:
+        try:
+            m = _dicom_matrix(path)
+            if m is not None:
+                out["pydicom"] = m[:h, :w]
+        except Exception:
+            pass
     try:
         import tifffile
 
@@ -210,7 +285,8 @@ def _level0(path: Path, ref: dict[str, Any]) -> dict[str, np.ndarray]:
 
         try:
             with openslide.open_slide(str(path)) as s:
-                out["openslide"] = np.asarray(s.read_region((0, 0), 0, (w, h)))[..., :3]
+                k = int(ref.get("os_level", 0))
+                out["openslide"] = np.asarray(s.read_region((0, 0), k, (w, h)))[..., :3]
         except openslide.OpenSlideError:
             pass
     try:
@@ -323,7 +399,7 @@ def sweep_one(path: Path, target: Path, work: Path) -> dict[str, Any]:
         if a0 is not None:
             for name, theirs in _level0(path, ref).items():
                 h, w = theirs.shape[:2]
-                diff = _compare(a0[:h, :w], theirs, exact=name == "tifffile")
+                diff = _compare(a0[:h, :w], theirs, exact=name in ("tifffile", "pydicom"))
                 if diff is not None:
                     problems.append(f"level 0 vs {name}: {diff}")
         st = "wrong" if problems else ("slow" if _slow(sec, mpx) else "ok")
@@ -383,8 +459,11 @@ def sweep_one(path: Path, target: Path, work: Path) -> dict[str, Any]:
     return row
 
 
-def _compose(sums: Path, tables: list[Path]) -> str:
-    """The results file: what ran, the held-out files' SHA-256, the runs' tables."""
+def _compose(sums: Path, tables: list[Path], findings: Path | None = None) -> str:
+    """The results file: what ran, the held-out files' SHA-256, the runs' tables.
+
+    ``findings``: a text of what the runs showed, printed after the summary.
+    """
     import platform
 
     import openslide
@@ -415,6 +494,8 @@ def _compose(sums: Path, tables: list[Path]) -> str:
         summary.append(f"| {lines[0].lstrip('# ')} | {steps[len('Steps: ') :]} |")
     head += ["Summary (steps of 5 per file: crash / wrong / slow / missing / refused / ok):", ""]
     head += [*summary, ""]
+    if findings is not None:
+        head += [findings.read_text().strip(), ""]
     body = [t.read_text().strip() + "\n" for t in tables]
     return "\n".join(head) + "\n" + "\n".join(body)
 
@@ -427,6 +508,7 @@ def main() -> None:
     ap.add_argument("--title", default="")
     ap.add_argument("--one", help="run one file, print its row as JSON (internal)")
     ap.add_argument("--src", type=Path, help="the imageform source folder whose commands run")
+    ap.add_argument("--findings", type=Path, help="--compose: what the runs showed (Markdown)")
     ap.add_argument(
         "--compose",
         nargs="+",
@@ -436,7 +518,7 @@ def main() -> None:
     )
     args = ap.parse_args()
     if args.compose:
-        print(_compose(args.compose[0], args.compose[1:]))
+        print(_compose(args.compose[0], args.compose[1:], args.findings))
         return
     if args.src:
         CLI_ENV["PYTHONPATH"] = str(args.src.resolve())

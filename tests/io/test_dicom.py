@@ -613,7 +613,7 @@ def test_cli_convert_a_frame_of_a_multi_frame_file(
     rgb = _RNG.integers(0, 256, (3, 6, 8, 3)).astype(np.uint8)
     p = _save(_dataset(rgb, photometric="RGB", frames=3), tmp_path / "cine.dcm")
     assert main(["info", str(p)]) == 0
-    assert "3 frames (convert one: --frame N)" in capsys.readouterr().out
+    assert "3 frames (read one: --frame N)" in capsys.readouterr().out
     out = tmp_path / "f.png"
     assert main(["convert", str(p), "-o", str(out)]) == 1
     err = capsys.readouterr().err

@@ -247,3 +247,37 @@ def test_hdr_declares_linear_srgb_unless_its_primaries_differ(
     ):  # Radiance's
         p.write_bytes(head % (b"PRIMARIES= " + stated + b"\n") + rgbe.tobytes())  # fmt: skip
         assert image_color_space(p).name == "linear_srgb"
+
+
+def test_info_of_a_truncated_hdr_says_where_its_scanlines_end_as_read_does(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``imageform info`` read the header alone and passed a file cut short: it now steps over
+    the scanlines (new-style runs, flat pixels, old runs) and names the one it ends in, the
+    scanline ``read_image`` names, at every cut."""
+    rle = tmp_path / "rle.hdr"
+    cv2.imwrite(str(rle), np.tile(HDR_RGB, (1, 4, 1))[..., ::-1].copy())
+    rgbe = RNG.integers(1, 255, (3, 5, 4)).astype(np.uint8)
+    rgbe[1, 2:] = rgbe[1, 1]
+    runs = b"".join(bytes(px) for px in rgbe[0]) + bytes(rgbe[1, 0]) + bytes(rgbe[1, 1])
+    runs += b"\1\1\1\3" + b"".join(bytes(px) for px in rgbe[2])
+    old = tmp_path / "old.hdr"
+    old.write_bytes(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 3 +X 5\n" + runs)
+    assert image_info(old) == (5, 3, 3, "float32", "hdr")
+    cut = tmp_path / "cut.hdr"
+    for good in (rle, old):
+        data = good.read_bytes()
+        start = data.index(b"\n", data.index(b"\n\n") + 2) + 1  # the first scanline
+        for n in range(start, len(data), 7):
+            cut.write_bytes(data[:n])
+            with pytest.raises(InvalidInputError) as said:
+                image_info(cut)
+            with pytest.raises(InvalidInputError) as read:
+                read_image(cut)
+            assert "the file is truncated (scanline" in str(said.value)
+            assert str(said.value) == str(read.value)
+    data = rle.read_bytes()
+    cut.write_bytes(data[: data.index(b"\n", data.index(b"\n\n") + 2) + 12])
+    assert main(["info", str(cut)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "truncated (scanline 0 of 9)" in err

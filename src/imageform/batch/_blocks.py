@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from imageform._validate import check_option
-from imageform.batch._lazy import _TiffMeta
+from imageform.batch._lazy import _is_dicom, _TiffMeta
 from imageform.errors import InvalidInputError, UnreadableFileError
 from imageform.workflows.color import CHUNKED_CHOICES
 
@@ -143,9 +143,15 @@ def _stain_stats(
         h, w = levels[k]
         step = max(1, int(np.ceil(np.sqrt(h * w / budget))))
         try:
-            with tifffile.TiffFile(src) as tf:
-                level = tf.series[0].levels[k].asarray()
-        except MemoryError:
+            if _is_dicom(src):  # a DICOM slide's level is a file of its series
+                from imageform.io import dicom
+
+                found = [f for f, fw, fh in dicom.slide_levels(src) if (fh, fw) == (h, w)]
+                level = read_image(found[0], max_pixels=h * w)[..., :3]
+            else:
+                with tifffile.TiffFile(src) as tf:
+                    level = tf.series[0].levels[k].asarray()
+        except (MemoryError, InvalidInputError):
             raise
         except Exception as exc:  # a damaged tile: the codec's own error, in one line
             text = str(exc).strip().splitlines()

@@ -24,11 +24,26 @@ if TYPE_CHECKING:
 __all__ = ["open_lazy"]
 
 
+def _is_dicom(path: Path) -> bool:
+    """Whether ``path`` is a file with DICOM's ``DICM`` at byte 128 (any suffix)."""
+    try:
+        with path.open("rb") as fh:
+            return fh.read(132)[128:132] == b"DICM"
+    except OSError:
+        return False
+
+
 def _kind(path: Path, output: bool = False) -> str:
-    """Return "tiff" or "zarr" for ``path``; an input may be a slide scanner's TIFF (.svs ...)."""
+    """Return "tiff", "zarr" or "dicom" for ``path``.
+
+    An input may be a slide scanner's TIFF (.svs ...) or a DICOM whole-slide image (its frames
+    tiles of one matrix).
+    """
     from imageform.io import IMAGE_FORMATS
 
     suffix = path.suffix.lower()
+    if not output and path.is_file() and _is_dicom(path):
+        return "dicom"
     if suffix in (".tif", ".tiff") or (not output and IMAGE_FORMATS.get(suffix) == "tiff"):
         return "tiff"
     if suffix == ".zarr":
@@ -36,8 +51,8 @@ def _kind(path: Path, output: bool = False) -> str:
     if output:
         raise InvalidInputError(f"expected a tiled .tif/.tiff or a .zarr output, got {path}")
     raise InvalidInputError(
-        f"expected a TIFF (.tif, .tiff, or a slide scanner's .svs, .ndpi, .scn, .bif, .qptiff) "
-        f"or a .zarr array, got {path}"
+        f"expected a TIFF (.tif, .tiff, or a slide scanner's .svs, .ndpi, .scn, .bif, .qptiff), "
+        f"a DICOM slide or a .zarr array, got {path}"
     )
 
 
@@ -409,6 +424,75 @@ def open_lazy(path: str | Path, chunk: int = 1024, *, level: int = 0) -> dask.ar
     return _open_lazy(path, chunk, None, as_int(level, "level", minimum=-64, maximum=64))
 
 
+def _dicom_lazy(p: Path, chunk: int, da: Any, level: int) -> Any:
+    """Open a DICOM whole-slide image's level lazily, its frames decoded as blocks need them.
+
+    Level 0 is the file given; the smaller levels are the files of its series in its folder
+    (:func:`imageform.io.dicom.slide_levels`).
+    """
+    from imageform.io import dicom
+
+    levels = dicom.slide_levels(p) or [(p, 0, 0)]
+    count = len(levels)
+    if not -count <= level < count:
+        raise InvalidInputError(
+            f"{p} has {count} pyramid level(s) (0 to {count - 1}, or -1 the smallest), got "
+            f"level {level}"
+        )
+    src = levels[level][0]
+    z = dicom.SlideLevel(src)
+    if z.ndim != 3 or z.shape[-1] != 3:
+        raise InvalidInputError(f"{p}: expected an RGB image (H, W, 3), got shape {z.shape}")
+    st = src.stat()
+    wrapped: Any = _DecodedOnce(z, chunk, src) if max(z.chunks[:2]) > chunk else _Guarded(z, src)
+    return da.from_array(
+        wrapped,
+        chunks=(chunk, chunk, 3),
+        name=f"imageform-dicom-{src}-{st.st_size}-{st.st_mtime_ns}-{chunk}",
+        asarray=False,
+        fancy=False,
+    )
+
+
+def _dicom_meta(p: Path) -> _TiffMeta:
+    """Return what a TIFF output copies from a DICOM slide: levels, tile, pixel size, ICC.
+
+    Levels as :func:`_dicom_lazy` reads them, each a whole factor smaller than the one above
+    (else level 0 alone); compression: JPEG where the frames are baseline JPEG, else zlib
+    (none for uncompressed frames); the pixel size from Pixel Spacing
+    (:func:`imageform.io.pixel_size_um`).
+    """
+    from imageform.io import dicom, pixel_size_um
+
+    levels = [(h, w) for _, w, h in dicom.slide_levels(p)]
+    z = dicom.SlideLevel(p)
+    levels = levels or [z.shape[:2]]
+    kept = [levels[0]]
+    for lv in levels[1:]:
+        if _factor(kept[-1], lv):
+            kept.append(lv)
+    th, tw = z.chunks[:2]
+    head = dicom.open_dicom(p, pixels=False)
+    uid = str(getattr(getattr(head, "file_meta", None), "TransferSyntaxUID", "") or "")
+    native = ("1.2.840.10008.1.2", "1.2.840.10008.1.2.1", "1.2.840.10008.1.2.2")
+    compression = 7 if uid == "1.2.840.10008.1.2.4.50" else 1 if uid in native else 8
+    microns = pixel_size_um(p)
+    res = None if microns is None else (1e4 / microns[0], 1e4 / microns[1])
+    icc = dicom.icc_profile_of(head)
+    return _TiffMeta(
+        tuple(kept),
+        tw if tw == th and tw % 16 == 0 else None,
+        compression,
+        res,
+        None if res is None else 3,
+        None,
+        False,
+        microns,
+        icc,
+        None,
+    )
+
+
 def _open_lazy(path: str | Path, chunk: int, opened: list[Any] | None, level: int = 0) -> Any:
     """:func:`open_lazy`; the TIFF stores it opens are appended to ``opened`` (if given)."""
     from imageform._optional import require
@@ -420,8 +504,11 @@ def _open_lazy(path: str | Path, chunk: int, opened: list[Any] | None, level: in
     zarr = require("zarr", what="imageform chunked")
     if not p.exists():
         raise InvalidInputError(f"input {p} does not exist")
+    kind = _kind(p)
     try:
-        if _kind(p) == "tiff":
+        if kind == "dicom":
+            return _dicom_lazy(p, chunk, da, level)
+        if kind == "tiff":
             z: Any = _tiff_lazy(p, chunk, da, zarr, opened, pyramid=level != 0)
             if not isinstance(z, (zarr.Array, zarr.Group)):
                 return z  # an uncompressed strip TIFF, already a dask array

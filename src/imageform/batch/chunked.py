@@ -44,7 +44,15 @@ from imageform.batch._blocks import (
     _stain_stats,
     _wb_gains,
 )
-from imageform.batch._lazy import _chunk_size, _factor, _kind, _open_lazy, _tiff_meta, open_lazy
+from imageform.batch._lazy import (
+    _chunk_size,
+    _dicom_meta,
+    _factor,
+    _kind,
+    _open_lazy,
+    _tiff_meta,
+    open_lazy,
+)
 from imageform.batch._write import (
     JPEG_QUALITY,  # noqa: F401 - documented here (process_chunked's compression)
     _check_tile,
@@ -331,9 +339,9 @@ def process_chunked(
     try:
         x = _open_lazy(src_p, chunk, opened)
         meta = None
-        if _kind(src_p) == "tiff":
+        if _kind(src_p) in ("tiff", "dicom"):
             try:
-                meta = _tiff_meta(src_p)
+                meta = _tiff_meta(src_p) if _kind(src_p) == "tiff" else _dicom_meta(src_p)
             except ImageformError:
                 raise
             except Exception as exc:  # pragma: no cover - open_lazy read it already

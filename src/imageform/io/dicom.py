@@ -20,6 +20,14 @@ rules (docs/design.md, "Images"):
   :func:`~imageform.io.image_color_space` declares; without one the RGB is read as sRGB.
 - **Frames**: one image per file, as for TIFF: a multi-frame file is refused by
   :func:`read_image`; :func:`read_dicom` reads one frame (``frame=``).
+- **Whole-slide images** (Modality SM with a Total Pixel Matrix): the frames are tiles of one
+  image, which :func:`read_image` returns assembled (:func:`slide_tiles`: TILED_FULL, the
+  tiles row by row, PS3.3 C.7.6.17.3; TILED_SPARSE, each frame where its Plane Position
+  (Slide) says, gaps white for colour and 0 for grey); ``read_dicom(frame=k)`` still reads
+  tile ``k``. One focal plane and one optical path (more are refused in one line). The
+  pyramid's smaller levels are the files of the same series in the same folder
+  (:func:`slide_levels`), which the chunked commands read a tile at a time
+  (:class:`SlideLevel`); the pixel size is Pixel Spacing's.
 """
 
 from __future__ import annotations
@@ -551,6 +559,13 @@ def dicom_window(
     return np.asarray(y, dtype=np.float64)
 
 
+def check_index(frame: object) -> int:
+    """Return ``frame`` as an int, or refuse what is no integer in one line."""
+    if isinstance(frame, bool) or not isinstance(frame, (int, np.integer)):
+        raise InvalidInputError(f"expected frame as an integer, got {describe(frame)}")
+    return int(frame)
+
+
 def check_frame(p: Path, info: DicomInfo, frame: object) -> int:
     """Return ``frame`` as an index into the file's frames, or refuse it in one line."""
     if isinstance(frame, bool) or not isinstance(frame, (int, np.integer)):
@@ -567,19 +582,50 @@ def multi_frame(p: Path, info: DicomInfo) -> InvalidInputError:
     return UnreadableFileError(
         p,
         f"a multi-frame DICOM of {info.frames} frames of {info.width} x "
-        f"{info.height} px; read one with frame=N, 0 to {info.frames - 1} (imageform info "
-        "and convert: --frame N)",
+        f"{info.height} px; read one with frame=N, 0 to {info.frames - 1} (imageform's "
+        "commands: --frame N)",
     )
 
 
 def read(
-    p: Path, check: Callable[[DicomInfo], None], *, frame: object = None, window: Any = None
+    p: Path,
+    check: Callable[[DicomInfo], None],
+    *,
+    frame: object = None,
+    window: Any = None,
+    whole: bool = False,
 ) -> np.ndarray:
     """Read a DICOM image: ``check`` sees the header first (the pixel limit); see :func:`decode`.
 
-    ``frame=None``: a single-frame file's image; a multi-frame file is refused.
+    ``frame=None``: a single-frame file's image, or a tiled slide's total pixel matrix
+    (:func:`assemble`); another multi-frame file is refused. ``whole``: a tiled slide is one
+    image (``frame`` 0 or None, as ``read_image`` counts it), else ``frame`` is one tile.
     """
-    info = header(p, open_dicom(p, pixels=False))  # the header alone, for the pixel limit
+    head = open_dicom(p, pixels=False)
+    info = header(p, head)  # the header alone, for the pixel limit
+    tiles = slide_tiles(p, head)
+    if tiles is not None and (frame is None or whole):
+        k = 0 if frame is None else check_index(frame)
+        if k:
+            raise InvalidInputError(
+                f"frame {k} is out of range: {p} holds one image (frame 0; a slide of "
+                f"{info.frames} tiles)"
+            )
+        check(slide_info(info, tiles))  # the whole matrix against the pixel limit
+        ds = open_dicom(p, pixels=True)
+        if "PixelData" not in ds:
+            raise UnreadableFileError(p, "the DICOM file has no pixel data")
+        if (
+            isinstance(window, str)
+            and info.channels == 1
+            and not info.window_center
+            and "VOILUTSequence" not in ds
+        ):  # "auto" without a window of its own: the whole slide's range, not each tile's
+            values = assemble(p, ds, info, tiles).astype(np.float64)
+            lo, hi = float(np.min(values)), float(np.max(values))
+            y = dicom_window(values, (lo + hi) / 2, max(hi - lo, 1e-12), function="linear_exact")
+            return np.ascontiguousarray(y.astype(np.float32))
+        return assemble(p, ds, info, tiles, window)
     if frame is None and info.frames > 1:
         raise multi_frame(p, info)
     index = 0 if frame is None else check_frame(p, info, frame)
@@ -590,3 +636,263 @@ def read(
     if index:
         info = header(p, ds, index)  # that frame's rescale and window
     return decode(p, ds, info, index, window)
+
+
+# ---------------------------------------------------------------- whole-slide images (tiles)
+
+
+class SlideTiles(NamedTuple):
+    """Where the frames of a tiled whole-slide DICOM image lie in its total pixel matrix.
+
+    ``width`` and ``height``: the Total Pixel Matrix Columns and Rows; ``tile`` the frame's
+    (columns, rows); ``origins`` each frame's top-left (row, column) in the matrix, from 0;
+    ``organization``: ``"TILED_FULL"`` (the frames in row-major order of tiles, PS3.3
+    C.7.6.17.3) or ``"TILED_SPARSE"`` (each frame's Plane Position (Slide), (0048,021E/021F)
+    Column/Row Position In Total Image Pixel Matrix, from 1).
+    """
+
+    width: int
+    height: int
+    tile: tuple[int, int]
+    origins: tuple[tuple[int, int], ...]
+    organization: str
+
+
+def slide_tiles(p: Path, ds: Any) -> SlideTiles | None:
+    """Return the tile layout of a slide image (Modality SM with a total pixel matrix).
+
+    None for anything else: a single-frame image, and a multi-frame one that states no layout
+    (neither TILED_FULL nor the frames' plane positions), whose frames stay frames.
+    A slide of several focal planes or optical paths is refused in one line (imageform
+    reads one image: a plane's would need choosing), and so is a layout whose frames do not
+    fill their places (a TILED_FULL count other than its tiles', a position off the matrix).
+    """
+    if str(ds.get("Modality", "") or "") != "SM" or "TotalPixelMatrixColumns" not in ds:
+        return None
+    try:
+        width, height = int(ds.TotalPixelMatrixColumns), int(ds.TotalPixelMatrixRows)
+        tw, th = int(ds.Columns), int(ds.Rows)
+        frames = int(ds.get("NumberOfFrames", 1) or 1)
+        planes = int(ds.get("TotalPixelMatrixFocalPlanes", 1) or 1)
+        paths = int(ds.get("NumberOfOpticalPaths", 1) or 1)
+    except (TypeError, ValueError, AttributeError) as exc:
+        raise UnreadableFileError(p, f"corrupt slide header ({_one_line(exc)})") from None
+    if frames == 1 and (width > tw or height > th or (width, height) == (tw, th)):
+        return None  # one frame: the image, as read before
+    # one frame larger than the matrix (OpenSlide's boxes_0.dcm: a 64 x 64 JPEG frame of a
+    # 16 x 16 matrix) is a TILED_FULL slide of one tile, cut to the matrix
+    if min(width, height, tw, th) < 1:
+        raise UnreadableFileError(p, f"a slide of {width} x {height} px in tiles of {tw} x {th}")
+    organization = str(ds.get("DimensionOrganizationType", "") or "").strip().upper()
+    if planes > 1 or paths > 1:
+        raise UnreadableFileError(
+            p,
+            f"a slide of {planes} focal plane(s) x {paths} optical path(s); imageform reads "
+            "slides of one plane and one path",
+        )
+    across, down = -(-width // tw), -(-height // th)
+    per_frame = ds.get("PerFrameFunctionalGroupsSequence", None)
+    stated = per_frame is not None and any("PlanePositionSlideSequence" in i for i in per_frame)
+    if organization != "TILED_FULL" and not stated:
+        # no layout stated: frames of their own (pathml's small_dicom.dcm has its tiles
+        # column by column, which row-major TILED_FULL would scramble), read by --frame
+        return None
+    if organization == "TILED_FULL":
+        if frames != across * down:
+            raise UnreadableFileError(
+                p,
+                f"a TILED_FULL slide of {frames} frames; its {width} x {height} px in tiles of "
+                f"{tw} x {th} are {across * down}",
+            )
+        origins = tuple((r * th, c * tw) for r in range(down) for c in range(across))
+        return SlideTiles(width, height, (tw, th), origins, "TILED_FULL")
+    if per_frame is None or len(per_frame) != frames:
+        raise UnreadableFileError(
+            p,
+            f"a {organization or 'tiled'} slide of {frames} frames without a plane position "
+            "for each (Per-frame Functional Groups)",
+        )
+    found = []
+    for k, item in enumerate(per_frame):
+        pos = item.get("PlanePositionSlideSequence", None)
+        try:
+            col = int(pos[0].ColumnPositionInTotalImagePixelMatrix) - 1
+            row = int(pos[0].RowPositionInTotalImagePixelMatrix) - 1
+        except (TypeError, ValueError, AttributeError, IndexError):
+            raise UnreadableFileError(p, f"frame {k} of the slide has no plane position") from None
+        if not (0 <= row < height and 0 <= col < width):
+            raise UnreadableFileError(
+                p,
+                f"frame {k} lies at row {row + 1}, column {col + 1}, off the {width} x "
+                f"{height} matrix",
+            )
+        found.append((row, col))
+    return SlideTiles(width, height, (tw, th), tuple(found), "TILED_SPARSE")
+
+
+def _background(info: DicomInfo) -> float:
+    """Return what a TILED_SPARSE slide's uncovered pixels hold.
+
+    White for colour (bright-field glass), 0 for grey (a fluorescence channel's background).
+    """
+    if info.channels == 3:
+        return float(np.iinfo(np.dtype(info.dtype)).max) if info.dtype.startswith("u") else 1.0
+    return 0.0
+
+
+def assemble(
+    p: Path,
+    ds: Any,
+    info: DicomInfo,
+    tiles: SlideTiles,
+    window: Any = None,
+) -> np.ndarray:
+    """Return the slide's total pixel matrix, frame by frame.
+
+    Each frame is decoded as :func:`decode` decodes it (its Modality LUT, its colour) and put at
+    its origin (:func:`place`).
+    """
+    dtype = np.dtype("float32" if window is not None else info.dtype)
+    return place(info, tiles, lambda k: decode(p, ds, info, k, window), dtype)
+
+
+def place(
+    info: DicomInfo,
+    tiles: SlideTiles,
+    frame_of: Callable[[int], np.ndarray],
+    dtype: Any,
+    rows: tuple[int, int] | None = None,
+    cols: tuple[int, int] | None = None,
+) -> np.ndarray:
+    """Put the frames ``frame_of(k)`` that cover ``rows`` x ``cols`` of the matrix in place.
+
+    A tile past the matrix's right or bottom edge is cut (TILED_FULL's last column and row);
+    where TILED_SPARSE frames leave gaps, :func:`_background`; a later frame over an earlier
+    one wins.
+    """
+    r0, r1 = rows or (0, tiles.height)
+    c0, c1 = cols or (0, tiles.width)
+    tw, th = tiles.tile
+    shape = (r1 - r0, c1 - c0) + ((info.channels,) if info.channels > 1 else ())
+    out = np.full(shape, _background(info), dtype=dtype)
+    for k, (top, left) in enumerate(tiles.origins):
+        a0, a1 = max(top, r0), min(top + th, r1)
+        b0, b1 = max(left, c0), min(left + tw, c1)
+        if a0 >= a1 or b0 >= b1:
+            continue
+        frame = np.asarray(frame_of(k)).reshape(th, tw, *shape[2:])
+        out[a0 - r0 : a1 - r0, b0 - c0 : b1 - c0] = frame[
+            a0 - top : a1 - top, b0 - left : b1 - left
+        ]
+    return out
+
+
+class SlideLevel:
+    """A tiled slide's total pixel matrix, read a region at a time (a Zarr-like array).
+
+    ``shape`` (rows, columns, 3), ``chunks`` a tile's, ``dtype``; ``a[r0:r1, c0:c1]``
+    decodes the frames that cover it, each read from the file alone (pydicom's
+    ``pixel_array(path, index=k)``: the frame's bytes, not the whole Pixel Data), as RGB.
+    """
+
+    def __init__(self, p: Path) -> None:
+        head = open_dicom(p, pixels=False)
+        info = header(p, head)
+        tiles = slide_tiles(p, head)
+        if tiles is None and info.frames > 1:  # frames of their own: no one image to read
+            raise multi_frame(p, info)
+        if tiles is None:
+            tiles = SlideTiles(info.width, info.height, (info.width, info.height), ((0, 0),), "")
+        self.path, self.info, self.tiles = p, info, tiles
+        c = (info.channels,) if info.channels > 1 else ()
+        self.shape = (tiles.height, tiles.width, *c)
+        self.chunks = (tiles.tile[1], tiles.tile[0], *c)
+        self.dtype, self.ndim = np.dtype(info.dtype), len(self.shape)
+
+    def _frame(self, k: int) -> np.ndarray:
+        from pydicom.pixels import pixel_array
+
+        index = k if self.info.frames > 1 else None
+        try:
+            with _quiet_lock, warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                return np.asarray(pixel_array(str(self.path), index=index))
+        except (RuntimeError, NotImplementedError) as exc:  # no plugin for its compression
+            raise _plugin_error(self.path, open_dicom(self.path, pixels=False), exc) from None
+
+    def __getitem__(self, key: Any) -> np.ndarray:
+        if not isinstance(key, tuple):
+            key = (key,)
+        key = key + (slice(None),) * (self.ndim - len(key))
+        r0, r1, rs = key[0].indices(self.shape[0])
+        c0, c1, cs = key[1].indices(self.shape[1])
+        a = place(self.info, self.tiles, self._frame, self.dtype, (r0, max(r1, r0)),
+                  (c0, max(c1, c0)))  # fmt: skip
+        return a[(slice(None, None, rs), slice(None, None, cs), *key[2:])]
+
+
+#: The attributes :func:`slide_levels` reads of each file in a slide's folder.
+_LEVEL_TAGS = ("SeriesInstanceUID", "PyramidUID", "Modality", "ImageType",
+               "TotalPixelMatrixColumns", "TotalPixelMatrixRows", "SOPInstanceUID")  # fmt: skip
+
+
+def slide_levels(p: Path) -> list[tuple[Path, int, int]]:
+    """Return the pyramid of a slide image: ``p`` and the smaller levels of its series.
+
+    A DICOM slide's levels are files of one series (Series Instance UID, and Pyramid UID
+    where given) in one folder, each a VOLUME image (Image Type's third value; labels,
+    overviews and thumbnails are not levels). The file given is level 0, as
+    :func:`read_image` reads it; the files of its series with a smaller total pixel matrix
+    follow, largest first, as ``(path, width, height)``.
+    """
+    with _quiet_lock, warnings.catch_warnings():  # pydicom's notes on odd UIDs: not our lines
+        warnings.simplefilter("ignore")
+        return _slide_levels(p)
+
+
+def _slide_levels(p: Path) -> list[tuple[Path, int, int]]:
+    pydicom = _pydicom(p)
+
+    def tags(f: Path) -> Any:
+        return pydicom.dcmread(f, stop_before_pixels=True, specific_tags=list(_LEVEL_TAGS))
+
+    me = tags(p)
+
+    def key(ds: Any) -> tuple[str, str]:
+        return str(ds.get("SeriesInstanceUID", "") or ""), str(ds.get("PyramidUID", "") or "")
+
+    def size(ds: Any) -> tuple[int, int] | None:
+        try:
+            w, h = int(ds.TotalPixelMatrixColumns), int(ds.TotalPixelMatrixRows)
+        except (AttributeError, TypeError, ValueError):
+            return None
+        kind = [str(v).upper() for v in (ds.get("ImageType", None) or [])]
+        ok = str(ds.get("Modality", "") or "") == "SM" and (len(kind) < 3 or kind[2] == "VOLUME")
+        return (w, h) if ok else None
+
+    top = size(me)
+    if top is None or not key(me)[0]:
+        return [(p, *top)] if top is not None else []
+    levels = [(p, *top)]
+    for f in sorted(p.parent.iterdir()):
+        if f == p or not f.is_file():
+            continue
+        try:
+            with f.open("rb") as fh:
+                if fh.read(132)[128:132] != b"DICM":
+                    continue
+            ds = tags(f)
+        except Exception:  # not a DICOM file we can read: not a level
+            continue
+        s = size(ds)
+        same = str(ds.get("SOPInstanceUID", "")) == str(me.get("SOPInstanceUID", ""))
+        known = any((w, h) == s for _, w, h in levels)  # one file a level (another plane ...)
+        smaller = s is not None and s[0] < top[0] and s[1] <= top[1]
+        if smaller and key(ds) == key(me) and not same and not known:
+            levels.append((f, *s))  # type: ignore[misc]
+    return [levels[0], *sorted(levels[1:], key=lambda t: -t[1])]
+
+
+def slide_info(info: DicomInfo, tiles: SlideTiles) -> DicomInfo:
+    """``info`` of a tiled slide as its whole image: the total pixel matrix, one frame."""
+    return info._replace(width=tiles.width, height=tiles.height, frames=1)

@@ -12,14 +12,17 @@ One rule for every format:
 - **Shape**: an image is ``(H, W, C)``, channels last; a grey image has ``C = 1`` (a 2-D
   TIFF or ``.npy`` comes back as ``(H, W, 1)``).
 - **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
-  (float16 is widened to float32). Other sample types are refused. A TIFF's samples are read
-  as the values they mean: a palette through its colour map (RGB), a bilevel image as 0/255,
-  WhiteIsZero inverted; a CMYK TIFF as sRGB through its embedded CMYK ICC profile (LittleCMS,
-  8 and 16 bits; without one refused), a Lab or raw-YCbCr TIFF refused; a palette BMP or GIF as RGB,
-  a 1-bit BMP as 0/255; a CMYK JPEG as sRGB, through its embedded CMYK ICC profile (LittleCMS)
-  where it has one, else ``(1 - C)(1 - K)``. Samples of fewer bits than
-  their container (10, 12, 14 bits in uint16) come as stored, the sensor's numbers (DN), as
-  tifffile and scikit-image read them: measurements (``emva``, ``characterize``) need them so;
+  (float16 is widened to float32). A TIFF's signed integers (int8, int16, int32: a CT's or a
+  microscope's numbers) come as floats holding each stored number exactly, float32 (float64
+  for int32), as a DICOM's signed samples do. Other sample types are refused. A TIFF's
+  samples are read as the values they mean: a palette through its colour map (RGB), a
+  bilevel image as 0/255, WhiteIsZero inverted; a CMYK TIFF as sRGB through its embedded
+  CMYK ICC profile (LittleCMS, 8 and 16 bits; without one refused), a Lab or raw-YCbCr TIFF
+  refused; a palette BMP or GIF as RGB, a 1-bit BMP as 0/255; a CMYK JPEG as sRGB, through
+  its embedded CMYK ICC profile (LittleCMS) where it has one, else ``(1 - C)(1 - K)``.
+  Samples of fewer bits than their container (10, 12, 14 bits in uint16) come as stored, the
+  sensor's numbers (DN), as tifffile and scikit-image read them: measurements (``emva``,
+  ``characterize``) need them so;
   such an image looks dark until scaled by ``65535 / (2**bits - 1)``.
 - **One image**: a TIFF holding a stack (pages, time points, z-planes) and an animated GIF or
   WebP are refused in one line saying what they hold and how to pick one, rather than read as
@@ -440,7 +443,7 @@ def _tiff_stack(axes: str, shape: tuple[int, ...]) -> str:
     parts = " x ".join(f"{n} {what}" for what, n in stack)
     return (
         f"a stack of {count} images of {w} x {h} px ({parts}); read one with frame=N, "
-        f"0 to {count - 1} (imageform info and convert: --frame N)"
+        f"0 to {count - 1} (imageform's commands: --frame N)"
     )
 
 
@@ -483,6 +486,8 @@ def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, I
         )
     width, height = shape[axes.index("X")], shape[axes.index("Y")]
     dtype = "uint8" if series.dtype == np.bool_ else str(series.dtype)  # bilevel: 0/255
+    if series.dtype.kind == "i" and series.dtype.itemsize <= 4:  # signed: floats, as stored
+        dtype = str(_signed_as_float(series.dtype))
     if int(page.photometric) == 3 and page.colormap is not None:  # palette: RGB, as read
         cmap = np.asarray(page.colormap)
         eight = int(cmap.max(initial=0)) < 256 or not np.any(cmap % 257)
@@ -528,8 +533,9 @@ def image_frames(path: str | Path) -> ImageFrames:
     elif fmt == "dicom":
         from imageform.io import dicom
 
-        n = dicom.header(p, dicom.open_dicom(p, pixels=False)).frames
-        axes = (("frames", n),) if n > 1 else ()
+        head = dicom.open_dicom(p, pixels=False)
+        n = dicom.header(p, head).frames
+        axes = (("frames", n),) if n > 1 and dicom.slide_tiles(p, head) is None else ()
     elif fmt in ("gif", "webp"):
         try:
             with _pillow_open(p) as im:
@@ -732,15 +738,20 @@ def image_info(path: str | Path, *, frame: int | None = None) -> ImageInfo:
         _pfm.check_size(ph, p.stat().st_size, p)  # uncompressed: its size is known
         return ImageInfo(ph.width, ph.height, ph.channels, "float32", "pfm")
     if fmt == "hdr":
-        with p.open("rb") as fh:
-            hh = _hdr.header(fh.read(1 << 16), p)
+        data = p.read_bytes()
+        hh = _hdr.header(data[: 1 << 16], p)
+        _hdr.check_size(hh, data, p)  # its scanlines stepped over, not decoded
         return ImageInfo(hh.width, hh.height, 3, "float32", "hdr")
     if fmt == "heif":
         return _heif_info(_open_heif(p))  # libheif's size: its rotation applied
     if fmt == "dicom":
         from imageform.io import dicom
 
-        d = dicom.header(p, dicom.open_dicom(p, pixels=False))
+        head = dicom.open_dicom(p, pixels=False)
+        d = dicom.header(p, head)
+        tiles = dicom.slide_tiles(p, head)
+        if tiles is not None:  # a whole-slide image: its frames are tiles of one image
+            d = dicom.slide_info(d, tiles)
         if frame is not None:
             _check_frame(p, frame, d.frames)
         elif d.frames > 1:  # refused, as read_image refuses it
@@ -830,7 +841,7 @@ def _pillow_frame(p: Path, im: Any, fmt: str, frame: int | None) -> None:
         raise UnreadableFileError(
             p,
             f"an animated {name} of {count} frames; read one with frame=N, 0 to {count - 1} "
-            "(imageform info and convert: --frame N)",
+            "(imageform's commands: --frame N)",
         )
     if _check_frame(p, frame, count):
         im.seek(int(frame))
@@ -1247,6 +1258,15 @@ def _tiff_frame(series: Any, path: Path, frame: int | None) -> tuple[np.ndarray,
     return whole[tuple(next(pick) if a not in "YXS" else slice(None) for a in axes)], plane
 
 
+def _signed_as_float(dtype: Any) -> np.dtype[Any]:
+    """Return the float type a TIFF's signed integer samples are read as: each number exactly.
+
+    float32 holds int8 and int16 exactly, float64 int32 (float32's 24-bit mantissa does
+    not), as a DICOM's signed samples come as float32, float64 beyond 24 stored bits.
+    """
+    return np.dtype(np.float32 if np.dtype(dtype).itemsize <= 2 else np.float64)
+
+
 def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarray, bool]:
     tifffile = _tifffile()
     try:
@@ -1276,6 +1296,8 @@ def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarra
     if cmyk is not None:
         return _orient(_tiff_cmyk_to_rgb(p, arr, cmyk), orientation), extra > 0
     arr = _tiff_samples(p, arr, photometric, bits, colormap)
+    if arr.dtype.kind == "i" and arr.dtype.itemsize <= 4:  # int8/16/32: the numbers, as floats
+        arr = arr.astype(_signed_as_float(arr.dtype))
     return _orient(arr, orientation), extra > 0
 
 
@@ -1508,7 +1530,7 @@ def read_image(
         arr = _read_heif(p, limit)
         has_alpha = arr.ndim == 3 and arr.shape[-1] in (2, 4)
     elif fmt == "dicom":
-        arr = _read_dicom(p, limit, frame)
+        arr = _read_dicom(p, limit, frame, whole=True)
     elif fmt == "netpbm":
         arr, has_alpha = _read_netpbm(p, limit)
     elif fmt == "pfm":
@@ -1529,13 +1551,15 @@ def read_image(
     return _normalise(p, arr, alpha, has_alpha)
 
 
-def _read_dicom(p: Path, limit: int, frame: object = None, window: Any = None) -> np.ndarray:
+def _read_dicom(
+    p: Path, limit: int, frame: object = None, window: Any = None, whole: bool = False
+) -> np.ndarray:
     from imageform.io import dicom
 
     def check(info: Any) -> None:
         _check_pixels(p, ImageInfo(info.width, info.height, info.channels, info.dtype, ""), limit)
 
-    return dicom.read(p, check, frame=frame, window=window)
+    return dicom.read(p, check, frame=frame, window=window, whole=whole)
 
 
 def read_dicom(

@@ -17,10 +17,13 @@ from imageform.errors import InvalidInputError
 from imageform.workflows._spec import Options, Run, option
 
 __all__ = [
+    "FRAME_HELP",
+    "OPTS_FRAME",
     "ImageIn",
     "ImageOut",
     "OnDevice",
     "RgbFrom",
+    "frame_option",
     "gpu_bands",
     "image_out_renames",
     "in_srgb",
@@ -42,6 +45,24 @@ OutOfRange = Literal["clip", "error"]
 Device = Literal["cpu", "cuda"]
 
 
+#: What ``--frame`` picks, for every command that reads image files.
+FRAME_HELP = (
+    "The image to read of a file holding several: a TIFF stack's (pages, z-planes, time "
+    "points, channels), a multi-frame DICOM's, an animated GIF's or WebP's; 0 the first "
+    "(imageform info lists them)."
+)
+
+
+def frame_option(help: str = FRAME_HELP) -> Any:
+    """Return the ``--frame N`` option: one image of a file that holds several, 0 the first.
+
+    Declared once here, for :class:`ImageIn` (every command that reads image files) and
+    ``imageform info`` (whose help adds that it lists them without it): one metavar, one
+    minimum (``--frame -1`` is a usage error), one default (None: a file of one image).
+    """
+    return option(None, help=help, metavar="N", minimum=0)
+
+
 @dataclass(frozen=True, kw_only=True)
 class ImageIn(Options):
     """How input images are read."""
@@ -56,6 +77,7 @@ class ImageIn(Options):
         help="Refuse input images with more pixels (default 100 Mpx, or IMAGEFORM_MAX_PIXELS).",
         metavar="N",
     )
+    frame: int | None = frame_option()
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -174,13 +196,17 @@ def gpu_bands(run: Run, what: str, fn: Any) -> Any:
     return band
 
 
+#: ``read(..., frame=OPTS_FRAME)``: the options' ``--frame`` (an :class:`ImageIn`'s).
+OPTS_FRAME: Any = object()
+
+
 def read(
     path: Path,
     opts: Any,
     *,
     alpha: str | None = None,
     colours: bool = False,
-    frame: int | None = None,
+    frame: Any = OPTS_FRAME,
 ) -> Any:
     """Read ``path`` with the options' alpha rule and pixel limit (an :class:`ImageIn`).
 
@@ -189,9 +215,15 @@ def read(
     is white) are scaled to the container's full range, as a PNG stores them. ``read_image``
     keeps them as stored (a sensor's numbers, DN, which the measuring commands read as
     such); read as colours unscaled, a 10-bit photograph came out 64 times too dark.
-    ``frame``: the image of a file that holds several (``read_image``'s ``frame``).
+    ``frame``: the image of a file that holds several (``read_image``'s ``frame``); by
+    default the options' ``--frame``, which every command's input images take alike. A file
+    that goes with the input (a mask, a flat field, a stain target) is read with
+    ``frame=None``: it holds one image.
     """
     from imageform.io import read_image
+
+    if frame is OPTS_FRAME:
+        frame = getattr(opts, "frame", None)
 
     img = read_image(
         path,
@@ -217,6 +249,25 @@ def tiff_sample_bits(path: Path) -> int | None:
             return int(page.bitspersample)
     except Exception:  # read_image has read it: nothing more to say here
         return None
+
+
+def tiff_signed_type(path: Path) -> str | None:
+    """``"int16"`` (int8, int32) for a TIFF of signed integer samples, else None.
+
+    ``read_image`` reads them as floats holding the stored numbers (float32; float64 for
+    int32), as a DICOM's signed samples: a CT's or a microscope's values, not colours.
+    """
+    with open(path, "rb") as fh:
+        if fh.read(4) not in (b"II*\0", b"MM\0*", b"II+\0", b"MM\0+"):
+            return None
+    import tifffile
+
+    try:
+        with tifffile.TiffFile(path) as tif:
+            dtype = tif.series[0].dtype if tif.series else None
+    except Exception:  # read_image says what is wrong with it
+        return None
+    return str(dtype) if dtype is not None and dtype.kind == "i" else None
 
 
 def full_range(path: Path, image: Any) -> Any:

@@ -21,6 +21,7 @@ from imageform import _deprecate
 from imageform.errors import InvalidInputError
 from imageform.workflows import _charts
 from imageform.workflows._images import (
+    OPTS_FRAME,
     ImageIn,
     ImageOut,
     RgbFrom,
@@ -59,17 +60,22 @@ __getattr__ = _deprecate.module_getattr(
 )
 
 
-def _rgb(path: Path, opts: Any) -> Any:
-    img = read(path, opts, colours=True)
+def _rgb(path: Path, opts: Any, frame: Any = OPTS_FRAME) -> Any:
+    img = read(path, opts, colours=True, frame=frame)
     if img.shape[-1] != 3:
         raise InvalidInputError(f"{path}: expected an RGB image, got {img.shape[-1]} channel(s)")
     refuse_unscaled_floats(path, img)
     return img
 
 
-def _srgb(run: Run, path: Path, opts: Any, *, clip: bool) -> tuple[Any, Any, str]:
-    """Read an RGB image; return it as read, as sRGB (``--from``/declared space), the space."""
-    img = _rgb(path, opts)
+def _srgb(
+    run: Run, path: Path, opts: Any, *, clip: bool, frame: Any = OPTS_FRAME
+) -> tuple[Any, Any, str]:
+    """Read an RGB image; return it as read, as sRGB (``--from``/declared space), the space.
+
+    ``frame``: the input's ``--frame`` by default; ``None`` for a file that goes with it.
+    """
+    img = _rgb(path, opts, frame)
     space = input_space(run, path, opts)
     return img, in_srgb(run, path, img, space, clip=clip), space
 
@@ -266,7 +272,7 @@ def _stain_mask(
         if target:  # a mask image belongs to the image, the target gets the default
             key = "auto" if opts.method == "macenko" else "none"
         else:
-            raw = np.asarray(read(Path(key), opts, alpha="drop"))
+            raw = np.asarray(read(Path(key), opts, alpha="drop", frame=None))
             m = (raw != 0).any(axis=-1) if raw.ndim == 3 else raw != 0
             if m.shape != img.shape[:-1]:
                 raise InvalidInputError(
@@ -304,7 +310,7 @@ def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
                 f"--target {opts.target} was saved by --method {other}: normalise with "
                 f"--method {other}, or give the reference image for --method {opts.method}"
             ) from None
-    ref = _srgb(run, opts.target, opts, clip=True)[1]
+    ref = _srgb(run, opts.target, opts, clip=True, frame=None)[1]
     step = _sample_step(ref)
     mask = _stain_mask(opts, ref, target=True, path=opts.target, step=step)
     sample = ref[::step, ::step]

@@ -18,6 +18,7 @@ from imageform.workflows._images import (
     RgbFrom,
     as_values,
     declared_space,
+    frame_option,
     gpu_bands,
     image_out_renames,
     input_space,
@@ -26,6 +27,7 @@ from imageform.workflows._images import (
     refuse_absent_device,
     refuse_unscaled_floats,
     rgb_space_or_auto,
+    tiff_signed_type,
     write,
     write_mapped,
 )
@@ -172,14 +174,6 @@ class ConvertOptions(ImageIn, ImageOut, OnDevice):
         "file's window, else its VOI LUT, else its min to max) or CENTER,WIDTH (e.g. 40,400).",
         metavar="auto|C,W",
     )
-    frame: int | None = option(
-        None,
-        help="The image to convert of a file holding several: a TIFF stack's (pages, z-planes, "
-        "time points, channels), a multi-frame DICOM's, an animated GIF's or WebP's; 0 the "
-        "first (imageform info lists them).",
-        metavar="N",
-        minimum=0,
-    )
 
     def check(self) -> None:
         """Check the options and normalise the ``--from`` and ``--to`` space names."""
@@ -314,8 +308,8 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     dst = opts.dst
     opts.check_used()  # the output was checked by execute (check_output), before this
     img = _read_dicom(image, opts)
-    if opts.window is None and img.dtype.kind == "f" and img.shape[-1] == 1:
-        _refuse_unwindowed(image, img)
+    if opts.window is None and img.dtype.kind == "f":
+        _refuse_unwindowed(image, img, opts.frame)
     src, declared = opts.src, None
     if src == "auto":
         declared = image_color_space(image)
@@ -353,14 +347,22 @@ def convert(run: Run, opts: ConvertOptions, *, out: Path, image: Path) -> Result
     return Result(summary, (f"{image} ({src}) -> {out} ({dst}): {how}",))
 
 
-def _refuse_unwindowed(image: Path, img: Any) -> None:
+def _refuse_unwindowed(image: Path, img: Any, frame: int | None) -> None:
     """Refuse a DICOM's float values outside [0, 1] (Hounsfield units ...) without ``--window``."""
     import numpy as np
 
     from imageform.io import image_info
 
     lo, hi = float(np.min(img)), float(np.max(img))
-    if (lo < 0 or hi > 1) and (_is_dicom(image) or image_info(image).format == "dicom"):
+    signed = tiff_signed_type(image) if lo < 0 or hi > 1 else None
+    if signed is not None:
+        raise InvalidInputError(
+            f"{image} holds {signed} samples (signed numbers, {lo:.6g} to {hi:.6g}: a "
+            "detector's or a CT's values, not colours); scale them to [0, 1] first"
+        )
+    if (lo < 0 or hi > 1) and (
+        _is_dicom(image) or image_info(image, frame=frame).format == "dicom"
+    ):
         raise InvalidInputError(
             f"{image} holds DICOM values from {lo:.6g} to {hi:.6g} (its Modality LUT's output, "
             "not colours); pass --window auto (its VOI window) or --window CENTER,WIDTH"
@@ -616,7 +618,9 @@ def white_balance(run: Run, opts: WhiteBalanceOptions, *, out: Path, image: Path
         )
 
         # the estimate reads the whole image on the CPU; the gains are applied on the device
-        keep = white_balance_mask(img, opts.mask, image, lambda p: read(p, opts, colours=True))
+        keep = white_balance_mask(
+            img, opts.mask, image, lambda p: read(p, opts, colours=True, frame=None)
+        )
         gains = np.asarray(
             white_balance_gains(
                 img, opts.method, transfer=transfer, space=space, mask=keep, **opts.params()
@@ -909,12 +913,9 @@ _IMG = Input(
 class InfoOptions(Options):
     """Options of ``imageform info``."""
 
-    frame: int | None = option(
-        None,
-        help="Describe this image of a file holding several (a TIFF stack's page, z-plane, time "
-        "point or channel; a GIF's or WebP's frame), 0 the first; without it they are listed.",
-        metavar="N",
-        minimum=0,
+    frame: int | None = frame_option(
+        "Describe this image of a file holding several (a TIFF stack's page, z-plane, time "
+        "point or channel; a GIF's or WebP's frame), 0 the first; without it they are listed."
     )
 
 
@@ -966,9 +967,12 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
         "tiff-description": " (recorded by imageform in the TIFF's description)",
     }.get(declared.source, f" ({declared.source})")
     which = f" (frame {opts.frame} of {frames.total})" if frames.total > 1 else ""
+    signed = tiff_signed_type(image) if head.format == "tiff" else None
+    summary["stored_dtype"] = signed or head.dtype
+    stored_as = f" (stored {signed}, signed: read as the numbers)" if signed else ""
     text = [
         f"{image}{which}: {head.format}, {head.width} x {head.height} px, {head.channels} "
-        f"channel(s), {head.dtype}",
+        f"channel(s), {head.dtype}{stored_as}",
         f"colour space: {space}{how}",
     ]
     if orientation not in (None, 1):
@@ -1019,7 +1023,7 @@ def _frames_info(image: Path, frames: Any) -> Result:
     text = [
         f"{image}: {head.format}, {frames.total} images ({what}), each {head.width} x "
         f"{head.height} px, {head.channels} channel(s), {head.dtype}",
-        f"frames 0 to {last}, in the file's order; read one: imageform info/convert --frame N, "
+        f"frames 0 to {last}, in the file's order; read one: imageform COMMAND --frame N, "
         "read_image(path, frame=N)",
     ]
     if len(frames.axes) > 1:  # frame N = 2 x (time point) + (z-plane), each from 0
@@ -1108,28 +1112,36 @@ def _is_dicom(image: Path) -> bool:
 
 def _dicom_info(image: Path) -> Result:
     """``imageform info`` of a DICOM file: the image, its modality values, window, spacing."""
-    from imageform.io import dicom_info, image_color_space
+    from imageform.io import dicom, dicom_info, image_color_space
 
     d = dicom_info(image)
+    tiles = dicom.slide_tiles(Path(image), dicom.open_dicom(Path(image), pixels=False))
+    w, h = (d.width, d.height) if tiles is None else (tiles.width, tiles.height)
     declared = image_color_space(image)
     summary: dict[str, Any] = {
         "image": image,
         "format": "dicom",
-        "width": d.width,
-        "height": d.height,
+        "width": w,
+        "height": h,
         "channels": d.channels,
         "dtype": d.dtype,
-        "megapixels": round(d.width * d.height / 1e6, 3),
+        "megapixels": round(w * h / 1e6, 3),
         "color_space": declared.name,
         "color_space_source": declared.source,
         "description": declared.description or None,
         "frames": d.frames,
         "dicom": d._asdict(),
     }
-    frames = f", {d.frames} frames (convert one: --frame N)" if d.frames > 1 else ""
+    frames = f", {d.frames} frames (read one: --frame N)" if d.frames > 1 else ""
+    if tiles is not None:
+        summary["tiles"] = {"count": d.frames, "organization": tiles.organization}
+        frames = (
+            f" (a {tiles.organization} slide of {d.frames} tiles of {d.width} x {d.height} px, "
+            "read as one image)"
+        )
     signed = "signed" if d.signed else "unsigned"
     text = [
-        f"{image}: dicom, {d.width} x {d.height} px, {d.channels} channel(s), {d.dtype}{frames}",
+        f"{image}: dicom, {w} x {h} px, {d.channels} channel(s), {d.dtype}{frames}",
         f"modality {d.modality or 'not given'}, {d.photometric}, {d.bits_stored} of "
         f"{d.bits_allocated} bits stored ({signed}), {d.transfer_syntax}",
     ]
@@ -1177,21 +1189,19 @@ def _dicom_slide(image: Path, d: Any) -> dict[str, Any]:
 
     if d.modality != "SM":
         return {}
-    import pydicom
+    from imageform.io import dicom
 
     try:
-        ds = pydicom.dcmread(image, stop_before_pixels=True)
-        total = (int(ds.get("TotalPixelMatrixColumns", 0) or 0),
-                 int(ds.get("TotalPixelMatrixRows", 0) or 0))  # fmt: skip
+        levels = [[w, h] for _, w, h in dicom.slide_levels(Path(image))]
     except Exception:  # dicom_info read it already; an odd attribute says nothing more
-        total = (0, 0)
+        levels = []
     um = pixel_size_um(image)
     out: dict[str, Any] = {
         "vendor": "dicom",
         "pixel_size_um": None if um is None else [round(float(v), 6) for v in um],
     }
-    if all(total):
-        out["levels"] = [list(total)]
+    if levels:
+        out["levels"] = levels
         out["tile"] = [d.width, d.height]
     return out
 

@@ -157,11 +157,15 @@ def _image_files(sources: Any) -> list[Path]:
     return files
 
 
-def _read(path: Path, opts: FlatfieldOptions) -> Any:
-    """Read an image as stored (uint8/uint16/floats), grey as (H, W)."""
-    from imageform.workflows._images import read
+def _read(path: Path, opts: FlatfieldOptions, *, own: bool = True) -> Any:
+    """Read an image as stored (uint8/uint16/floats), grey as (H, W).
 
-    img = read(path, opts)
+    ``own``: one of the input images (its ``--frame``); else a file that goes with them (a
+    mask, a flat or dark field), which holds one image.
+    """
+    from imageform.workflows._images import OPTS_FRAME, read
+
+    img = read(path, opts, frame=OPTS_FRAME if own else None)
     return img[..., 0] if img.ndim == 3 and img.shape[2] == 1 else img
 
 
@@ -169,7 +173,7 @@ def _as_field(path: Path, opts: FlatfieldOptions, scale_integers: bool) -> Any:
     """Read a measured flat or dark field as floats (integer dark frames: fractions of range)."""
     import numpy as np
 
-    a = _read(path, opts)
+    a = _read(path, opts, own=False)
     if scale_integers and a.dtype in (np.uint8, np.uint16):
         return a.astype(np.float64) / np.iinfo(a.dtype).max
     return a.astype(np.float64)
@@ -180,7 +184,12 @@ def _read_mask(path: Path, opts: FlatfieldOptions, shape: tuple[int, ...]) -> An
     if not path.is_file():
         raise InvalidInputError(f"--mask {path} does not exist (give auto or a mask image)")
     return mask_of(
-        _read(path, opts), path, shape[0], shape[1], "the images", "no pixel would count"
+        _read(path, opts, own=False),
+        path,
+        shape[0],
+        shape[1],
+        "the images",
+        "no pixel would count",
     )
 
 

@@ -181,7 +181,7 @@ def _edge_image(
     pitch = None if given is None else _Pitch(given, given, "--pixel-pitch")
     if image.suffix.lower() not in _RAW_SUFFIXES:
         img = read(image, opts)  # reads (and refuses) first: a missing file, a bad DICOM
-        fmt = image_info(image).format
+        fmt = image_info(image, frame=opts.frame).format
         dicom = fmt == "dicom"
         if dicom and pitch is None:
             pitch = _dicom_pitch(image)
