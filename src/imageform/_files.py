@@ -47,6 +47,7 @@ __all__ = [
     "check_output",
     "check_writable",
     "final_name",
+    "git_lfs_pointer",
     "not_a_regular_file",
     "publish",
     "refuse_special",
@@ -193,6 +194,47 @@ def not_a_regular_file(path: str | Path) -> str | None:
     if stat.S_ISDIR(mode):
         return "is a folder"
     return f"is {_what(mode)}, not a regular file"
+
+
+#: The first line of a Git LFS pointer file (what a clone without ``git lfs`` holds).
+_LFS_POINTER = b"version https://git-lfs.github.com/spec/"
+
+
+def git_lfs_pointer(path: str | Path) -> str | None:
+    r"""Say so when ``path`` is a Git LFS pointer, not the file it stands for.
+
+    A repository cloned without ``git lfs`` holds, under the image's or raw file's name, a
+    text file of about 130 bytes naming the real file's hash and size; every decoder would
+    call it "not a PNG file" or "not a raw file". Returns the reason (naming the size never
+    fetched) or None: not a pointer, or not readable (the decoder's message then).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "photo.png"
+    >>> lines = ["version https://git-lfs.github.com/spec/v1", "oid sha256:4d7a", "size 123"]
+    >>> _ = p.write_text("\n".join(lines))
+    >>> git_lfs_pointer(p)[:50]
+    'a Git LFS pointer, not the file: the 123-byte file'
+    """
+    try:
+        if os.stat(path).st_size > 1024:
+            return None
+        with open(path, "rb") as f:
+            text = f.read(1024)
+    except (OSError, ValueError):
+        return None
+    if not text.startswith(_LFS_POINTER):
+        return None
+    size = next(
+        (ln.split()[1] for ln in text.decode("ascii", "replace").splitlines()
+         if ln.startswith("size ") and len(ln.split()) == 2),
+        "?",
+    )  # fmt: skip
+    return (
+        f"a Git LFS pointer, not the file: the {size}-byte file it stands for was never "
+        "fetched (git lfs pull)"
+    )
 
 
 def _folder_problem(parent: Path) -> str:

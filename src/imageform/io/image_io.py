@@ -91,7 +91,13 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from imageform import _deprecate
-from imageform._files import atomic_write, check_writable, final_name, not_a_regular_file
+from imageform._files import (
+    atomic_write,
+    check_writable,
+    final_name,
+    git_lfs_pointer,
+    not_a_regular_file,
+)
 from imageform._typing import ArrayLike
 from imageform._validate import (
     as_path,
@@ -925,6 +931,8 @@ def _existing(path: str | Path) -> Path:
         raise InvalidInputError(f"input {p} {not_a_regular_file(p) or 'is not a regular file'}")
     if p.stat().st_size == 0:  # before any decoder says "cannot identify" or "not a PNG file"
         raise UnreadableFileError(p, "an empty file (0 bytes)")
+    if (lfs := git_lfs_pointer(p)) is not None:
+        raise UnreadableFileError(p, lfs)
     return p
 
 

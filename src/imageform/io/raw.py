@@ -28,7 +28,7 @@ from typing import Any, Literal
 import numpy as np
 
 from imageform import _deprecate
-from imageform._files import RAW_SUFFIXES, atomic_write, check_writable
+from imageform._files import RAW_SUFFIXES, atomic_write, check_writable, git_lfs_pointer
 from imageform._typing import ArrayLike
 from imageform._validate import describe
 from imageform.errors import InvalidInputError, UnreadableFileError
@@ -664,30 +664,6 @@ def _truncated(p: Path, end: int, size: int) -> UnreadableFileError:
     )
 
 
-#: The first line of a Git LFS pointer file (what a clone without ``git lfs`` holds).
-_LFS_POINTER = b"version https://git-lfs.github.com/spec/"
-
-
-def _lfs_pointer(p: Path, n_bytes: int) -> UnreadableFileError | None:
-    """Refuse a Git LFS pointer file (the raw file itself never fetched), naming its size."""
-    if n_bytes > 1024:
-        return None
-    with p.open("rb") as f:
-        text = f.read(1024)
-    if not text.startswith(_LFS_POINTER):
-        return None
-    size = next(
-        (ln.split()[1] for ln in text.decode("ascii", "replace").splitlines()
-         if ln.startswith("size ") and len(ln.split()) == 2),
-        "?",
-    )  # fmt: skip
-    return UnreadableFileError(
-        p,
-        f"a Git LFS pointer, not the raw file: the {size}-byte file it stands for was never "
-        "fetched (git lfs pull)",
-    )
-
-
 def _tag_bytes(value: Any) -> bytes:
     """Return an UNDEFINED tag's value as bytes (tifffile gives bytes or a tuple of ints)."""
     return value if isinstance(value, bytes) else bytes(np.asarray(value, np.uint8).ravel())
@@ -712,8 +688,8 @@ def _read_raw(
     p = Path(path)
     if not p.is_file():
         raise InvalidInputError(f"raw file {p} does not exist")
-    if (lfs := _lfs_pointer(p, p.stat().st_size)) is not None:
-        raise lfs
+    if (lfs := git_lfs_pointer(p)) is not None:
+        raise UnreadableFileError(p, lfs)
     if importlib.util.find_spec("rawpy") is None:
         # without LibRaw, a DNG as imageform writes it (one uncompressed CFA image) is read
         # with tifffile; any other raw file needs the extra (the message says so)

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from imageform._files import git_lfs_pointer
 from imageform._typing import ArrayLike
 from imageform._validate import describe
 from imageform.errors import InvalidInputError, UnreadableFileError
@@ -302,6 +303,8 @@ class VideoReader:
                 raise InvalidInputError(f"video {p} does not exist")
             if not p.is_file():
                 raise InvalidInputError(f"video {p} is not a regular file")
+            if (lfs := git_lfs_pointer(p)) is not None:
+                raise UnreadableFileError(p, lfs)
         elif not os.path.exists(path):
             raise InvalidInputError(f"capture device {path} does not exist")
         options = {"framerate": str(fps)} if device and fps else {}
