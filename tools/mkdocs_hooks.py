@@ -116,6 +116,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "sfm-k1": "benchmarks/check_sfm_k1.py",
     "sfm-fisheye": "benchmarks/check_sfm_fisheye.py",
     "sfm-choice": "benchmarks/check_sfm_choice.py",
+    "sfm-inliers": "benchmarks/check_sfm_inliers.py",
     "sfm-intruders": "benchmarks/check_sfm_intruders.py",
     "sfm-dense": "benchmarks/check_sfm_dense.py",
     "pair-pose": "benchmarks/check_pair_pose.py",

@@ -570,31 +570,31 @@ def test_room_photographs_with_exif_focal_length(
     assert sfm_scenes.align_rms(np.array(C_est), C_true) < 0.01
 
 
-def test_a_fisheye_without_a_camera_file_runs_off_and_falls_back(
+def test_a_fisheye_without_a_camera_file_does_not_settle(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """The C3VD colonoscope (a Kannala-Brandt fisheye, f 199 px; tests/data/endo) without a
-    camera file: f and one radial term run off along their valley (537.6 -> 2487 px, k1
-    -17.8); the run-off is said and the radial term held, f refined alone (362.1 px; it does
-    not settle either, and says so). The equidistant fisheye is tried (f 196.8 px) and not
-    kept: on the tracks of both models its robust cost is the higher (1913 against 1494
-    px^2 when measured, sfm-choice-2026-11-30j.md; the median errors tie at 0.54 px), so
-    the camera file is the f-alone pinhole, no distortion, and the notes say to calibrate."""
+    camera file: f and one radial term wander along their valley and do not settle (537.6
+    -> 466.1 -> 287.9 -> 421.9 px, k1 -0.43), and the notes say to calibrate. Before the
+    rim's observations were judged in the image (sfm-inliers-2026-11-30k.md) they ran off
+    (2487 px, k1 -17.8) and f was refined alone (362.1 px); the frames fix neither (the
+    clip's pixels are not square: docs/camera-file.md). The equidistant fisheye is tried
+    (f 202.0 px) and not kept: on the tracks of both models its robust cost is the higher
+    (1976 against 1764 px^2 when measured; 1913 against 1494 in sfm-choice-2026-11-30j.md),
+    so the camera file is SIMPLE_RADIAL."""
     endo = Path(__file__).resolve().parents[1] / "data" / "endo"
     out = tmp_path / "rec"
     args = [str(endo / "*.jpg"), "-o", str(out), "--auto-mask", "--contrast-threshold", "0.01"]
     assert main(["reconstruct", *args]) == 0
     err = capsys.readouterr().err
-    assert "the camera ran off" in err and "k1 held at 0.0000, f refined alone" in err, err
     assert "the camera did not settle" in err and "calibrate the camera" in err, err
-    assert "the fisheye tried (SIMPLE_RADIAL ran off" in err, err
+    assert "the fisheye tried (" in err, err
     intr = json.loads((out / "metrics.json").read_text())["intrinsics"]
-    assert intr["fallback"].startswith("the camera ran off"), intr
     assert intr["model"] == "SIMPLE_RADIAL" and intr["fisheye"].endswith("not kept"), intr
     costs = [float(c) for c in re.findall(r"(\d+) px\^2", intr["fisheye"])]
     assert len(costs) == 2 and costs[0] > costs[1], intr
-    assert intr["k1"] == 0.0 and intr["focal_px"] < 537.6, intr
-    # with the true camera the reconstruction settles: no such note
+    assert intr["focal_px"] < 537.6, intr
+    # with the working camera the reconstruction settles: no such note
     again = [*args[:2], str(tmp_path / "rec2"), *args[3:], "--camera", str(endo / "camera.toml")]
     assert main(["reconstruct", *again]) == 0
     err = capsys.readouterr().err

@@ -56,6 +56,15 @@ pipeline, each step a public function:
    keypoints and verified pairs kept), twice at most, and the model with the most frames
    returned, as COLMAP keeps the largest of its models.
 
+Through a lens (``distortion``), every error is measured in the image, where the
+keypoints' noise is, through the lens's local linear map at each keypoint: the RANSACs of
+steps 3, 5 and 6 run on undistorted pixels with one threshold for a pair or a frame (the
+threshold times the median stretch of its keypoints), and each match or correspondence
+they refused is judged again on its own (the Sampson distance in image pixels,
+``_sampson_image``; the reprojection error in the image, 3 px); the tracks are triangulated
+on the errors in the image, and a track one view of which fails the checks loses that view
+(its worst), not all (a fisheye's rim is stretched ten to thirty times past the median).
+
 The reconstruction is up to a similarity (a rotation, a translation and a scale): the
 first registered frame's camera (frame 0's, when it is registered) is the world frame and
 the initial pair's baseline has length 1.
@@ -99,6 +108,11 @@ _TRACE: dict[str, Any] | None = None
 #: (refined in six degrees of freedom) for the pair's pose to register a frame
 #: (``pose_from_pair`` in :func:`reconstruct_sequence`).
 _PAIR_POSE_TOL_DEG = 5.0
+#: Whether the estimators' inliers are judged again one by one in image pixels through the
+#: lens (``_sampson_image``, the pose's reprojection error through ``_image_jacobian``),
+#: their RANSAC run with one threshold stretched for the whole set (False: as before
+#: 2026-11-30k, for the benchmark's comparison).
+_PER_VIEW_INLIERS = True
 
 
 @dataclass(frozen=True)
@@ -991,7 +1005,14 @@ def bundle_adjust(
 
 
 def _triangulate_tracks(
-    K: F64, R: F64, t: F64, frame: NDArray[np.int64], col: NDArray[np.int64], uv: F64, m: int
+    K: F64,
+    R: F64,
+    t: F64,
+    frame: NDArray[np.int64],
+    col: NDArray[np.int64],
+    uv: F64,
+    m: int,
+    lens: F64 | None = None,
 ) -> F64:
     r"""Points ``m`` from observations (frame, which point, pixel): DLT, then Gauss-Newton.
 
@@ -999,6 +1020,13 @@ def _triangulate_tracks(
     system of its point (normalised coordinates :math:`K^{-1} u`, each row of unit norm);
     the point is the eigenvector of :math:`A^T A`'s smallest eigenvalue (Hartley &
     Zisserman 2004, sec. 12.2), then three Gauss-Newton steps on the reprojection error.
+    ``lens`` (M, 2, 2): each observation's map from undistorted to image pixels
+    (:func:`_image_jacobian`); the errors are then measured in the image, where the
+    keypoints' noise is (the maximum-likelihood point): each Gauss-Newton residual and
+    its Jacobian multiplied by it, each observation's DLT rows divided by its stretch
+    (:func:`_magnification`). Without it the undistorted pixels weigh alike, and a
+    fisheye's rim view, its noise stretched ten to thirty times, pulls the point off the
+    other views.
     """
     Ki = np.linalg.inv(K)
     xn = uv @ Ki[:2, :2].T + Ki[:2, 2]
@@ -1007,6 +1035,9 @@ def _triangulate_tracks(
         [xn[:, :1] * Pm[:, 2] - Pm[:, 0], xn[:, 1:2] * Pm[:, 2] - Pm[:, 1]], axis=1
     )  # (M, 2, 4)
     rows /= np.maximum(np.linalg.norm(rows, axis=2, keepdims=True), 1e-300)
+    if lens is not None:
+        mag = _magnification(lens)
+        rows /= np.where(np.isfinite(mag) & (mag > 0), mag, 1.0)[:, None, None]
     A = _sum_blocks(col, np.einsum("mki,mkj->mij", rows, rows), m)
     A += 1e-300 * np.eye(4)
     _, vec = np.linalg.eigh(A)
@@ -1032,6 +1063,9 @@ def _triangulate_tracks(
         Jp[:, 1, 1] = fy / z
         Jp[:, 1, 2] = -fy * Xc[:, 1] / z**2
         J = Jp @ Rm
+        if lens is not None:
+            r = np.einsum("mij,mj->mi", lens, r)
+            J = lens @ J
         H = _sum_blocks(col, np.einsum("mki,mkj->mij", J, J), m) + 1e-12 * np.eye(3)
         g = _sum_blocks(col, np.einsum("mki,mk->mi", J, r), m)
         ok = np.isfinite(H).all(axis=(1, 2)) & np.isfinite(g).all(axis=1)
@@ -1185,6 +1219,31 @@ def _magnification(A: F64) -> F64:
     det = np.abs(A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0])
     with np.errstate(divide="ignore"):
         return np.asarray(1.0 / np.sqrt(det), np.float64)
+
+
+def _sampson_image(E: F64, K: F64, p1: F64, p2: F64, A1: F64, A2: F64) -> F64:
+    r"""Return the Sampson distances of correspondences in image pixels, (N,).
+
+    ``p1``, ``p2``: undistorted pixels; ``A1``, ``A2`` (N, 2, 2): the lens's local map from
+    undistorted to image pixels at each (:func:`_image_jacobian`). With
+    :math:`F = K^{-T} E K^{-1}` and the gradients :math:`g_1 = (F^T x_2)_{1:2}`,
+    :math:`g_2 = (F x_1)_{1:2}` of the epipolar residual :math:`x_2^T F x_1` in undistorted
+    pixels, an isotropic unit noise in the image moves that residual by the variance
+    :math:`\|A_1^{-T} g_1\|^2 + \|A_2^{-T} g_2\|^2`: the first-order distance
+    :math:`|x_2^T F x_1| / \sqrt{\cdot}` is the image pixels' Sampson distance (Hartley &
+    Zisserman 2004, sec. 4.2.6, with each point's covariance :math:`A^{-1} A^{-T}`). The
+    pinhole's (``A`` the identity) is the usual one.
+    """
+    Ki = np.linalg.inv(K)
+    F = Ki.T @ E @ Ki
+    Fx1 = p1 @ F[:, :2].T + F[:, 2]
+    Ftx2 = p2 @ F[:2, :] + F[2, :]
+    num = np.sum(p2 * Fx1[:, :2], -1) + Fx1[:, 2]
+    with np.errstate(all="ignore"):
+        g1 = np.linalg.solve(np.swapaxes(A1, 1, 2), Ftx2[:, :2, None])[:, :, 0]
+        g2 = np.linalg.solve(np.swapaxes(A2, 1, 2), Fx1[:, :2, None])[:, :, 0]
+        d = np.abs(num) / np.sqrt(np.sum(g1 * g1, 1) + np.sum(g2 * g2, 1))
+    return np.asarray(np.where(np.isfinite(d), d, np.inf), np.float64)
 
 
 def _homography_hint(
@@ -1938,6 +1997,25 @@ def _reconstruct(
         v = v[np.isfinite(v)]
         return max(1.0, float(np.median(v))) if v.size else 1.0
 
+    def epipolar_inliers(
+        E: F64, i: int, kp1: NDArray[np.int64], j: int, kp2: NDArray[np.int64], found: Any
+    ) -> NDArray[np.bool_]:
+        """Return the RANSAC's inliers ``found`` and the matches within ``threshold_px``.
+
+        The RANSAC's threshold is one for the pair (``stretch``: the median); each match
+        it refused is judged again by its own Sampson distance in image pixels
+        (:func:`_sampson_image`): a fisheye's rim match, stretched past the pair's median
+        by the undistortion, is kept when it fits within ``threshold_px`` in the image, as
+        a pinhole's match would. Without a lens (or ``_PER_VIEW_INLIERS`` off): the
+        RANSAC's inliers.
+        """
+        inl = np.asarray(found, bool)
+        if distortion is None or not _PER_VIEW_INLIERS:
+            return inl
+        a1, a2 = all_A[offset[i] + kp1], all_A[offset[j] + kp2]
+        d = _sampson_image(np.asarray(E, np.float64), k, ideal[i][kp1], ideal[j][kp2], a1, a2)
+        return np.asarray(inl | (d < threshold_px), bool)
+
     def verify(i: int, j: int) -> None:
         """Match frames i and j, keep the essential matrix's inliers and the parallax."""
         m = match_features(feats[i].descriptors, feats[j].descriptors, ratio=ratio)
@@ -1956,7 +2034,7 @@ def _reconstruct(
             er = find_essential_matrix(p1, p2, k, threshold=thr, rng=rng)
         except (DegenerateConfigurationError, InvalidInputError):
             return
-        inl = np.asarray(er.inliers, bool)
+        inl = epipolar_inliers(er.E, i, m[:, 0], j, m[:, 1], er.inliers)
         seen["inliers"] = max(seen["inliers"], int(inl.sum()))
         if inl.sum() < 30:
             return
@@ -2060,8 +2138,16 @@ def _reconstruct(
             d = np.einsum("mij,mj->mi", o_A[ids], d)
         return np.asarray(np.linalg.norm(d, axis=1), np.float64)
 
-    def triangulate(tids: NDArray[np.int64]) -> None:
-        """Triangulate the tracks ``tids`` (no point yet) from their registered views."""
+    def triangulate(tids: NDArray[np.int64], retries: int = 2) -> None:
+        """Triangulate the tracks ``tids`` (no point yet) from their registered views.
+
+        With a lens (and ``_PER_VIEW_INLIERS``), a track of three views or more one view
+        of which fails the checks loses that view (its worst: behind the camera, else the
+        largest error in the image) and is triangulated again, ``retries`` times at most:
+        each view is judged, as COLMAP's track triangulation keeps a track's consistent
+        views (Schönberger & Frahm 2016), not the track by its worst view (a fisheye's
+        rim view, a keypoint matched off its point).
+        """
         tids = np.unique(tids)
         tids = tids[~has_point()[tids]]
         if tids.size == 0:
@@ -2072,7 +2158,10 @@ def _reconstruct(
         col = np.searchsorted(tids, o_track[sel])
         cnt = np.bincount(col, minlength=tids.size)
         fr = o_frame[sel]
-        X = _triangulate_tracks(k, Rs, ts, fr, col, o_uv[sel], tids.size)
+        X = _triangulate_tracks(
+            k, Rs, ts, fr, col, o_uv[sel], tids.size,
+            o_A[sel] if distortion is not None and _PER_VIEW_INLIERS else None,
+        )  # fmt: skip
         X[cnt < 2] = np.nan
         fin = np.all(np.isfinite(X), axis=1)
         X[~fin] = 0.0
@@ -2093,6 +2182,24 @@ def _reconstruct(
         np.maximum.at(spread, col, np.degrees(np.arccos(cosm)))
         good = fin & ~bad & (2.0 * spread >= 1.5)
         P[tids[good]] = X[good]
+        if retries > 0 and distortion is not None and _PER_VIEW_INLIERS:
+            again = fin & bad & (cnt >= 3)
+            if again.any():
+                worst = np.where(z > 0, err, np.inf)
+                worst[~again[col]] = -1.0
+                top = np.full(tids.size, -1.0)
+                np.maximum.at(top, col, worst)
+                # the view (one a track) whose error is its track's largest
+                drop = np.flatnonzero(again[col] & (worst == top[col]))
+                _, once = np.unique(col[drop], return_index=True)
+                drop = sel[drop[once]]
+                o_ok[drop] = False
+                if _TRACE is not None:
+                    _TRACE["dropped"] += [
+                        (f, q, "triangulation")
+                        for f, q in zip(o_frame[drop].tolist(), o_kp[drop].tolist(), strict=True)
+                    ]
+                triangulate(tids[again], retries - 1)
 
     def relens(k1: float) -> None:
         """Undistort every keypoint again with ``k`` and the radial term ``k1`` (its lens)."""
@@ -2390,7 +2497,8 @@ def _reconstruct(
         try:
             thr = threshold_px * stretch(a, m0[:, 0], b, m0[:, 1])
             er = find_essential_matrix(p1, p2, k, threshold=thr, rng=rng)
-            rp = recover_pose(er.E, p1, p2, k, inliers=np.asarray(er.inliers, bool))
+            inl0 = epipolar_inliers(er.E, a, m0[:, 0], b, m0[:, 1], er.inliers)
+            rp = recover_pose(er.E, p1, p2, k, inliers=inl0)
         except (DegenerateConfigurationError, InvalidInputError) as exc:
             notes.append(f"frames {a} and {b}: no pose to start from ({exc})")
             continue
@@ -2473,6 +2581,21 @@ def _reconstruct(
 
     refused: list[str] = []  # pairs pose_from_pair's last call refused, and why
 
+    def image_inliers(
+        fi: int, kp: NDArray[np.int64], X3: F64, R: F64, t: F64, limit: float
+    ) -> NDArray[np.bool_]:
+        """Which points ``X3`` reproject within ``limit`` image pixels of ``fi``'s ``kp``.
+
+        Each error through the lens's local map at its keypoint (``all_A``), as the
+        filters measure it: the PnP's RANSAC threshold is one for the frame (``stretch``:
+        the median), and a correspondence it refused is kept when it is within ``limit``
+        in the image.
+        """
+        proj, z = _project_one(k, R, t, X3)
+        d = np.einsum("mij,mj->mi", all_A[offset[fi] + kp], proj - ideal[fi][kp])
+        with np.errstate(invalid="ignore"):
+            return np.asarray((z > 0) & (np.linalg.norm(d, axis=1) < limit), bool)
+
     def pose_from_pair(
         fi: int, kp: NDArray[np.int64], tracks: NDArray[np.int64]
     ) -> tuple[_Pose, int, float] | None:
@@ -2504,7 +2627,9 @@ def _reconstruct(
         near_ = reg_[np.argsort(np.abs(reg_ - fi), kind="stable")[:2]]
         near_c = cen[np.searchsorted(reg_, near_)]
         reach = 3.0 * step * np.abs(near_ - fi)
+        per_view = distortion is not None and _PER_VIEW_INLIERS
         thr = 3.0 * stretch(fi, kp)
+        A_kp = all_A[offset[fi] + kp]
         X = P[tracks]
         xh = np.column_stack([ideal[fi][kp], np.ones(kp.size)]) @ np.linalg.inv(k).T
         best: _Pose | None = None
@@ -2533,7 +2658,12 @@ def _reconstruct(
                 Xc = A + s_ * u
                 with np.errstate(divide="ignore", invalid="ignore"):
                     uv = (Xc @ k[:2].T) / Xc[:, 2:3]
-                    inl = (Xc[:, 2] > 0) & (np.linalg.norm(uv - ideal[fi][kp], axis=1) < thr)
+                    d = uv - ideal[fi][kp]
+                    near = np.linalg.norm(d, axis=1) < thr
+                    if per_view:  # or within 3 px in the image
+                        d = np.einsum("mij,mj->mi", A_kp, d)
+                        near |= np.linalg.norm(d, axis=1) < 3.0
+                    inl = (Xc[:, 2] > 0) & near
                 if int(inl.sum()) > got:
                     cand = _Pose(Rr @ Rs[g], Rr @ ts[g] + s_ * u, inl)
                     got = int(inl.sum())
@@ -2575,11 +2705,15 @@ def _reconstruct(
             """
             try:
                 thr = 3.0 * stretch(fi, kp)
-                r = solve_pnp_ransac(X3, ideal[fi][kp], k, threshold=thr, rng=rng)
+                r: Any = solve_pnp_ransac(X3, ideal[fi][kp], k, threshold=thr, rng=rng)
             except (DegenerateConfigurationError, InvalidInputError):
                 return None, 0
             if not bool(r.valid):
                 return r, 0
+            if distortion is not None and _PER_VIEW_INLIERS:
+                R_, t_ = np.asarray(r.R, np.float64), np.asarray(r.tvec, np.float64).ravel()
+                inl_ = np.asarray(r.inliers, bool) | image_inliers(fi, kp, X3, R_, t_, 3.0)
+                r = _Pose(R_, t_, inl_)
             if turned(np.asarray(r.R, np.float64)):
                 flipped.append(int(np.sum(r.inliers)))
                 return r, 0
