@@ -387,8 +387,12 @@ def _labelled(
             d32 = integral32[i + lo, lo : lo + wid]
             g8i = g8[i]
             for j in range(wid):
-                box = a32[j] - b32[j] - c32[j] + d32[j]
-                dk[j] = np.uint8(np.int32(g8i[j]) * k10 < ten * box - k51)
+                # in 32 bits (twice the lanes of numba's 64-bit promotion): every step is
+                # exact there, the table's entries and so their differences below 2³¹
+                # and 10 S below 2³¹ (w <= 917)
+                box = np.int32(np.int32(a32[j] - b32[j]) - np.int32(c32[j] - d32[j]))
+                lhs = np.int32(np.int32(g8i[j]) * k10)
+                dk[j] = np.uint8(lhs < np.int32(np.int32(ten * box) - k51))
         else:
             a = integral[i + hi, hi : hi + wid]
             b = integral[i + lo, hi : hi + wid]
