@@ -338,7 +338,7 @@ def test_span_hull_is_qhulls() -> None:
         n = int(rng.integers(2, 40))
         first = rng.integers(0, 30, n).astype(np.int64)
         last = first + rng.integers(0, 30, n)
-        spans, twice = _span_hull(first, last, np.empty(4 * n + 2, np.int64))
+        spans, twice, _ = _span_hull(first, last, np.empty(4 * n + 2, np.int64))
         rows = np.arange(n)
         pts = np.concatenate([np.stack([first, rows], 1), np.stack([last, rows], 1)])
         assert spans == int(np.sum(last - first + 1))
@@ -371,3 +371,55 @@ def test_a_holed_cross_is_left_before_its_boundary_is_traced() -> None:
     assert _spans_thin(g[r0 : r1 + 1, c0 : c1 + 1] < 0.5)
     m = detect_aruco_markers((g * 255).astype(np.uint8), "4x4_50")
     assert m.ids.tolist() == [7]
+
+
+def test_quad_pretest_never_refuses_a_quad_the_boundary_gives() -> None:
+    """``_quad_possible`` (the spans' hull vertices, each tried as the first point) is False
+    only where ``_quad`` on the traced boundary and the sides' test refuse too: on random
+    squares, discs, triangles, Ls and blobs, rasterised at random poses; and it refuses
+    most of the shapes that are no quadrilateral."""
+    from imageform._kernels.aruco import _quad, _quad_possible, _span_hull
+
+    rng = np.random.default_rng(11)
+    refused = kept = 0
+    for k in range(120):
+        n = 48
+        v, u = np.mgrid[0:n, 0:n] - (n - 1) / 2 + rng.uniform(-0.5, 0.5, 2)[:, None, None]
+        a = rng.uniform(0, np.pi)
+        x, y = np.cos(a) * u + np.sin(a) * v, -np.sin(a) * u + np.cos(a) * v
+        r = rng.uniform(6, 20)
+        kind = k % 5
+        if kind == 0:  # a square, a little sheared
+            mask = (np.abs(x + 0.2 * rng.uniform(-1, 1) * y) < r) & (np.abs(y) < r * 0.9)
+        elif kind == 1:  # a disc
+            mask = x**2 + y**2 < r * r
+        elif kind == 2:  # a triangle
+            mask = (y > -r) & (y < r - np.abs(2 * x))
+        elif kind == 3:  # an L
+            mask = ((np.abs(x) < r) & (np.abs(y) < r)) & ~((x > 0) & (y > 0))
+        else:  # a blob
+            mask = x**2 / r**2 + y**2 / (0.5 * r) ** 2 + 0.3 * np.sin(3 * x / r) < 1
+        if mask.sum() < 20:
+            continue
+        rows = np.flatnonzero(mask.any(axis=1))
+        sub = mask[rows[0] : rows[-1] + 1]
+        first = np.argmax(sub, axis=1).astype(np.int64)
+        last = (n - 1 - np.argmax(sub[:, ::-1], axis=1)).astype(np.int64)
+        hull = np.empty(4 * len(sub) + 2, np.int64)
+        _, _, top = _span_hull(first, last, hull)
+        pad = np.pad(mask, 1)
+        inner = pad[:-2, 1:-1] & pad[2:, 1:-1] & pad[1:-1, :-2] & pad[1:-1, 2:]
+        vv, uu = np.nonzero(mask & ~inner)
+        pts = np.column_stack([uu, vv]).astype(np.float64)
+        area = float(mask.sum())
+        quad = np.empty((4, 2))
+        ok = bool(_quad(pts, area, quad))
+        if ok:
+            s = np.hypot(*(np.roll(quad, -1, axis=0) - quad).T)
+            ok = not (s.min() < 6.0 or s.min() < 0.25 * s.max())
+        vx, vy = np.empty(4 * len(sub) + 2), np.empty(4 * len(sub) + 2)
+        possible = bool(_quad_possible(hull, top, 0, int(rows[0]), area, 6.0, vx, vy))
+        assert possible or not ok, (k, kind)
+        refused += not possible
+        kept += ok
+    assert kept >= 20 and refused >= 35

@@ -313,6 +313,36 @@ def test_the_true_marker_of_an_id_read_twice_is_used() -> None:
         assert _angle(pose.R, R) < 1.0
 
 
+def test_a_first_frame_seeing_only_a_marker_read_twice_is_ambiguous() -> None:
+    """The map's one marker in view with a misprinted copy beside it (the other markers out
+    of view): the two sightings are equally supported, so the first frame gives no pose
+    ("ambiguous", both sightings' corners). With the map's other markers in view a first
+    frame is settled (only the true sighting agrees with them: the first frame of
+    test_the_true_marker_of_an_id_read_twice_is_used)."""
+    from benchmarks.check_track_duplicates import K as K_BENCH
+    from benchmarks.check_track_duplicates import second_print
+
+    truth, frames = second_print(7)  # marker 7 and, from frame 4 on, a 40 mm print of id 7
+    lone = MarkerMap([7], [marker_points(30.0)], "4x4_50")
+    tracker = MarkerMapTracker(lone, K_BENCH)
+    pose = tracker.update(frames[6])
+    assert not pose.found and pose.searched == "ambiguous"
+    assert pose.image_points.shape == (8, 2)
+    pose = tracker.update(frames[3])  # the copy not in view: found
+    assert pose.found and pose.searched == "frame"
+    assert np.linalg.norm(pose.tvec - truth[3][1]) / np.linalg.norm(truth[3][1]) < 0.02
+
+
+def test_rival_sightings() -> None:
+    """Equally supported hypotheses that take different sightings of one marker."""
+    from imageform.geometry.marker_map import _rival_sightings
+
+    which = np.array([0, 1, 0])
+    assert _rival_sightings(np.array([[True, True, False], [False, False, True]]), which)
+    assert not _rival_sightings(np.array([[True, True, False], [True, False, False]]), which)
+    assert not _rival_sightings(np.array([[True, True, True]]), np.array([0, 1, 2]))
+
+
 def test_one_sighting_of_a_marker_per_hypothesis() -> None:
     """Of two sightings of one marker that agree with a hypothesis, the nearer stays."""
     from imageform.geometry.marker_map import _one_each

@@ -634,3 +634,26 @@ def test_4k_rgb_frames_are_read_halved_as_their_grey(monkeypatch: pytest.MonkeyP
         assert pa.found and pa.searched == pb.searched and pa.corners == 24
         np.testing.assert_array_equal(pa.image_points, pb.image_points)
     assert calls == [2, 2]
+
+
+def test_frames_reading_the_marker_twice_are_noted_as_ambiguous(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Frames showing marker 7 and a second print of id 7 from the first frame on: no pose
+    (nothing tells the two apart without an earlier frame), and a note says how many."""
+    import cv2
+
+    from benchmarks.check_track_duplicates import second_print
+
+    _, frames = second_print(7)
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for k, f in enumerate(frames[4:7]):  # both prints in view
+        cv2.imwrite(str(folder / f"f{k}.png"), f)
+    camera = write_camera(tmp_path / "camera.toml", Camera(K, image_size=SIZE))
+    out = tmp_path / "poses.csv"
+    args = ["track", str(folder), "--camera", str(camera), "--board", "aruco:7"]
+    assert main([*args, "--marker", "30mm", "--dictionary", "4x4_50", "-o", str(out)]) == 0
+    rows = _read(out)
+    assert [r["found"] for r in rows] == ["0"] * 3 and {r["corners"] for r in rows} == {"8"}
+    assert "3 of the 3 frames read a marker's id in two places" in capsys.readouterr().err

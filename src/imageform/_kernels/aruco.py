@@ -11,10 +11,12 @@ r"""numba kernels of the ArUco marker detector (``imageform.geometry.aruco``).
 - :func:`component_quads`: for each candidate component, whether its rows' spans fill
   70 % of their convex hull (:func:`_span_hull`; textured clutter does not, and is left
   there), its holes (the background of its
-  box not 4-connected to the box's edge, found from the runs' gaps), its outer boundary
-  pixels, the quadrilateral through four extreme boundary points (accepted when it has the
-  filled component's area) and the sides fitted to the boundary pixels (total least
-  squares), corners where they meet.
+  box not 4-connected to the box's edge, found from the runs' gaps), whether a quad of the
+  hull's vertices could pass (:func:`_quad_possible`: a blob that is no quadrilateral is
+  left before its boundary is traced), its outer boundary pixels, the quadrilateral
+  through four extreme boundary points (accepted when it has the filled component's area)
+  and the sides fitted to the boundary pixels (total least squares), corners where they
+  meet.
 - :func:`cell_means`: the mean grey of each marker cell, sampled bilinearly at ``3 x 3``
   points through the homography of the unit square onto the quad; :func:`decode_cells`:
   Otsu's split of a quad's cells, its border and the nearest code.
@@ -374,7 +376,7 @@ def _labelled(
     dark = np.zeros(8 * n_words + 1, dtype=np.uint8)
     flip = np.zeros(8 * n_words, dtype=np.uint8)
     words = flip.view(np.uint64)
-    trans = np.empty(wid + 2, dtype=np.int64)
+    trans = np.empty(8 * n_words + 8, dtype=np.int64)
     for i in range(hgt):
         # the four corners of every window of the row as slices: the compiler vectorises
         dk = dark[1 : wid + 1]
@@ -385,8 +387,12 @@ def _labelled(
             d32 = integral32[i + lo, lo : lo + wid]
             g8i = g8[i]
             for j in range(wid):
-                box = a32[j] - b32[j] - c32[j] + d32[j]
-                dk[j] = np.uint8(np.int32(g8i[j]) * k10 < ten * box - k51)
+                # in 32 bits (twice the lanes of numba's 64-bit promotion): every step is
+                # exact there, the table's entries and so their differences below 2³¹
+                # and 10 S below 2³¹ (w <= 917)
+                box = np.int32(np.int32(a32[j] - b32[j]) - np.int32(c32[j] - d32[j]))
+                lhs = np.int32(np.int32(g8i[j]) * k10)
+                dk[j] = np.uint8(lhs < np.int32(np.int32(ten * box) - k51))
         else:
             a = integral[i + hi, hi : hi + wid]
             b = integral[i + lo, hi : hi + wid]
@@ -400,10 +406,11 @@ def _labelled(
         n_trans = 0
         for w in range(n_words):
             if words[w] != 0:
+                # without a branch a pixel (which of the eight flip is unpredictable): each
+                # written, kept when it flips (overwritten by the next otherwise)
                 for j in range(8 * w, 8 * w + 8):
-                    if flip[j]:
-                        trans[n_trans] = j
-                        n_trans += 1
+                    trans[n_trans] = j
+                    n_trans += flip[j]
         if nr + n_trans // 2 > cap or n_prov + n_trans // 2 > cap_labels:
             empty = np.zeros(0, dtype=np.int64)
             return np.zeros((0, 3), dtype=np.int64), empty, empty, np.zeros((0, 5), np.int64)
@@ -690,8 +697,11 @@ SPAN_NUM, SPAN_DEN = 7, 10
 @njit(nogil=True, error_model="numpy")
 def _span_hull(
     first: NDArray[np.int64], last: NDArray[np.int64], hull: NDArray[np.int64]
-) -> tuple[int, int]:  # pragma: no cover - compiled
-    """Return the rows' spans' pixel count and twice their convex hull's area (integers).
+) -> tuple[int, int, int]:  # pragma: no cover - compiled
+    """Return the rows' spans' pixel count, twice their convex hull's area and its vertices.
+
+    In integers; the hull's ``top`` vertices are left in ``hull`` (``x, y`` pairs, box
+    coordinates, in the chain's order; collinear points left out).
 
     Row ``i``'s span runs from column ``first[i]`` to ``last[i]``; the hull is that of the
     spans' end pixels' centres (Andrew's monotone chain over the points in row order, each
@@ -725,7 +735,101 @@ def _span_hull(
     for q in range(top):
         r = (q + 1) % top
         twice += hull[2 * q] * hull[2 * r + 1] - hull[2 * r] * hull[2 * q + 1]
-    return area, abs(twice)
+    return area, abs(twice), top
+
+
+#: ``component_quads`` tries :func:`_quad_possible` (``top²`` steps for a hull of ``top``
+#: vertices) before tracing a component's boundary (steps in proportion to its runs) when
+#: ``top² <= QUICK`` times its runs: the test costs less than the tracing it may spare.
+QUICK = 16
+
+
+@njit(nogil=True, error_model="numpy")
+def _quad_possible(
+    hull: NDArray[np.int64],
+    top: int,
+    c0: int,
+    r0: int,
+    area: float,
+    min_side: float,
+    vx: NDArray[np.float64],
+    vy: NDArray[np.float64],
+) -> bool:  # pragma: no cover - compiled
+    """Whether :func:`_quad` and the sides' test could accept the component (False: never).
+
+    ``hull``: :func:`_span_hull`'s ``top`` vertices (box coordinates; the box's corner at
+    column ``c0``, row ``r0``); ``area``: the filled component's pixels; ``vx``, ``vy``: work
+    buffers of ``top`` entries. :func:`_quad`'s four points are boundary pixels, all of them
+    in the spans' hull, whose vertices are boundary pixels (rows' first and last): its
+    farthest points (from the centroid, then from the first: strictly convex distances) are
+    hull vertices, and so is the first in raster order of the points farthest either side of
+    the diagonal (a linear function, largest on a vertex or an edge, whose first point in
+    raster order is one of its ends). So with the hull's vertices in raster order, each
+    tried as the first point, :func:`_quad`'s own steps give every quad it can find, one of
+    them its own (its first point depends on the boundary's centroid): when none has the
+    component's area and sides long and even enough (``component_quads``' statuses 3 and 4)
+    the boundary need not be traced. The same arithmetic on the same points: the verdict
+    for the true first point is :func:`_quad`'s.
+    """
+    if top < 3:
+        return True  # a line: left to the full test
+    for q in range(top):
+        vx[q] = hull[2 * q] + c0
+        vy[q] = hull[2 * q + 1] + r0
+    for q in range(1, top):  # raster order: row, then column (insertion: a few vertices)
+        x, y = vx[q], vy[q]
+        t = q - 1
+        while t >= 0 and (vy[t] > y or (vy[t] == y and vx[t] > x)):
+            vx[t + 1] = vx[t]
+            vy[t + 1] = vy[t]
+            t -= 1
+        vx[t + 1] = x
+        vy[t + 1] = y
+    for i0 in range(top):
+        i2 = 0
+        best = -1.0
+        for k in range(top):
+            d = (vx[k] - vx[i0]) ** 2 + (vy[k] - vy[i0]) ** 2
+            if d > best:
+                best = d
+                i2 = k
+        dx = vx[i2] - vx[i0]
+        dy = vy[i2] - vy[i0]
+        i1 = 0
+        i3 = 0
+        hi = -math.inf
+        lo = math.inf
+        for k in range(top):
+            side = dx * (vy[k] - vy[i0]) - dy * (vx[k] - vx[i0])
+            if side > hi:
+                hi = side
+                i1 = k
+            if side < lo:
+                lo = side
+                i3 = k
+        if hi <= 0 or lo >= 0:
+            continue
+        idx = (i0, i1, i2, i3)
+        signed = 0.0
+        perimeter = 0.0
+        s_lo = math.inf
+        s_hi = 0.0
+        for k in range(4):
+            x, y = vx[idx[k]], vy[idx[k]]
+            xn, yn = vx[idx[(k + 1) % 4]], vy[idx[(k + 1) % 4]]
+            signed += x * yn - y * xn
+            s = math.hypot(xn - x, yn - y)
+            perimeter += s
+            s_lo = min(s_lo, s)
+            s_hi = max(s_hi, s)
+        signed *= 0.5
+        expected = area - 0.5 * perimeter
+        if abs(abs(signed) - expected) > 0.12 * area:
+            continue
+        if s_lo < min_side or s_lo < 0.25 * s_hi:
+            continue
+        return True
+    return False
 
 
 @njit(nogil=True, error_model="numpy")
@@ -752,6 +856,10 @@ def component_quads(
     traced; on the 720p webcam videos of ``benchmarks/results/track-speed-2026-11-30j.md``
     the test leaves 46 % of the holed candidates' runs, every quad found kept: the
     quads' spans filled at least 74 % of their hull, the decoded markers' 95 %).
+    Statuses 3 and 4 are told before the boundary is traced too when the spans' hull has
+    few vertices (``top² <= QUICK`` runs): :func:`_quad_possible` tries each of its vertices
+    as :func:`_quad`'s first point, and when no quad has the area and the sides the boundary
+    is not traced (status 3 then; the same quads found: ``track-speed-2026-11-30k.md``).
     """
     m = cand.shape[0]
     quads = np.zeros((m, 4, 2))
@@ -781,6 +889,8 @@ def component_quads(
     first = np.empty(max_hh, dtype=np.int64)
     last = np.empty(max_hh, dtype=np.int64)
     hull = np.empty(4 * max_hh + 2, dtype=np.int64)
+    vx = np.empty(4 * max_hh + 2)
+    vy = np.empty(4 * max_hh + 2)
     for c in range(m):
         k = cand[c]
         r0, r1, c0, c1 = stats[k, 1], stats[k, 2], stats[k, 3], stats[k, 4]
@@ -806,7 +916,7 @@ def component_quads(
         for i in range(hh):
             first[i] = rs[row_ptr[i]] - c0
             last[i] = re[row_ptr[i + 1] - 1] - c0
-        spans, twice = _span_hull(first[:hh], last[:hh], hull)
+        spans, twice, top = _span_hull(first[:hh], last[:hh], hull)
         if 2 * SPAN_DEN * spans < SPAN_NUM * twice:
             status[c] = 6  # its rows' spans fill too little of their hull: no quadrilateral
             continue
@@ -875,6 +985,11 @@ def component_quads(
         filled = hh * ww - outside
         if filled == stats[k, 0]:
             status[c] = 1  # no holes: a solid blob, not a marker (its code has white cells)
+            continue
+        if top * top <= QUICK * nr and not _quad_possible(
+            hull, top, c0, r0, float(filled), min_side, vx, vy
+        ):
+            status[c] = 3  # no quad of its hull's vertices passes: its boundary not traced
             continue
         # outer boundary: filled pixels with a 4-neighbour outside (or beyond the box)
         n = 0

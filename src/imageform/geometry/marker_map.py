@@ -82,6 +82,24 @@ def _one_each(agree: NDArray[np.bool_], err: F64, which: NDArray[np.int64]) -> N
     return out
 
 
+def _rival_sightings(agree: NDArray[np.bool_], which: NDArray[np.int64]) -> bool:
+    """Whether hypotheses ``agree`` (h, m) take different sightings of one map marker.
+
+    ``which`` (m,): each sighting's marker in the map. The hypotheses are the best supported
+    (as many agreeing markers each): when two of them take different sightings of a marker
+    read twice (only one marker of the map visible, read in two places; two copies of the
+    object in view), the frame alone cannot say which is the object.
+    """
+    for k in np.unique(which):
+        seen = np.flatnonzero(which == k)
+        if seen.size < 2:
+            continue
+        taken = agree[:, seen]
+        if np.count_nonzero(taken.any(axis=0)) > 1:
+            return True
+    return False
+
+
 def _fit_rotation(A: F64, B: F64) -> F64:
     """Return the rotation R minimising ``sum ||R a_i - b_i||^2`` (centred points, Kabsch)."""
     U, _, Vt = np.linalg.svd(B.T @ A)
@@ -278,7 +296,14 @@ class MarkerMapTracker:
        :math:`t = t_m - R\,t_i` (:attr:`MarkerMap.marker_poses`); under each, a marker
        *agrees* when its four corners reproject within :math:`\max(3,\ 0.2\,s_{px})`
        pixels (:math:`s_{px}` its side in the image). The hypothesis with most agreeing
-       markers wins (ties: nearer the previous frame's pose, then the smaller error);
+       markers wins (ties: nearer the previous frame's pose, then the smaller error). On a
+       first frame (or after a lost one) whose best-supported hypotheses take different
+       sightings of a marker read twice (the only marker of the map in view, read in two
+       places; two copies of the object), nothing in the frame tells which is the object:
+       the pose is missing with ``searched = "ambiguous"`` and every sighting's corners in
+       ``image_points`` (the tracker does not guess; a later frame with more of the map in
+       view, or one copy only, settles it). A misread marker among others of the map is no
+       such case: only its true sighting agrees with them;
     3. the pose is refined by Levenberg-Marquardt on the reprojection error of all
        agreeing markers' corners jointly (undistorted), the markers then farther than
        :math:`\max(2,\ 0.1\,s_{px})` pixels are dropped and the pose refined again;
@@ -402,8 +427,12 @@ class MarkerMapTracker:
 
     def _solve(
         self, which: NDArray[np.int64], uv: F64
-    ) -> tuple[F64, F64, float, NDArray[np.bool_]] | None:
-        """Solve the object's pose from the markers ``which`` seen at ``uv`` (m, 4, 2)."""
+    ) -> tuple[F64, F64, float, NDArray[np.bool_]] | str | None:
+        """Solve the object's pose from the markers ``which`` seen at ``uv`` (m, 4, 2).
+
+        ``"ambiguous"`` on a first frame whose best-supported hypotheses take different
+        sightings of a marker read twice (:func:`_rival_sightings`).
+        """
         from imageform.geometry.pnp import _normalised, refine_pose
 
         k = self.K / self.K[2, 2]
@@ -455,6 +484,9 @@ class MarkerMapTracker:
         if last is not None and last.found:
             near = np.array([_angle(R, last.R) for R in R_all])
         best = int(np.lexsort((total, near, -count))[0])
+        first = last is None or not last.found
+        if first and _rival_sightings(agree[count == count[best]], which):
+            return "ambiguous"  # no previous frame to choose between the sightings by
         # the other tilt: the best hypothesis more than 5 degrees from the winner (with one
         # marker, its IPPE mirror)
         far = np.array([_angle(R, R_all[best]) > np.radians(5.0) for R in R_all])
@@ -524,7 +556,10 @@ class MarkerMapTracker:
         if which.size == 0:
             return self._lost()
         got = self._solve(which, uv)
-        if got is None:
+        if got == "ambiguous":
+            self._lost()
+            return _missing("ambiguous", uv.reshape(-1, 2))
+        if got is None or isinstance(got, str):
             return self._lost(uv.reshape(-1, 2))
         R, t, rms, inl = got
         self._since_frame = 0 if searched == "frame" else self._since_frame + 1

@@ -338,10 +338,15 @@ class MarkerTracker:
 
     The marker's id read in several places (a reflection, a second print:
     ``detect_aruco_markers(..., all_sightings=True)``): the sighting whose corners are
-    nearest the previous frame's; on a first frame (or after a lost one) the one with the
-    fewest bits corrected, then the largest. A sighting in the box farther than half a side
-    from the previous frame's corners (the marker gone out of the box, a second print in
-    it) sends the search to the whole frame, where the nearest sighting is kept.
+    nearest the previous frame's. A sighting in the box farther than half a side from the
+    previous frame's corners (the marker gone out of the box, a second print in it) sends
+    the search to the whole frame, where the nearest sighting is kept. On a first frame (or
+    after a lost one) nothing tells the sightings apart: each is a square of the marker's
+    code, and a print of another size is the marker's side at another distance (IPPE fits
+    both exactly), so the tracker does not choose: the pose is missing with ``searched =
+    "ambiguous"`` and every sighting's corners in ``image_points`` (4 a sighting), until one
+    sighting is left in view (then followed as above). A known side does not settle it
+    from one frame either: it fixes each sighting's distance, not which is the marker.
 
     A frame without the marker is a missing pose (NaN), never carried over.
 
@@ -408,7 +413,14 @@ class MarkerTracker:
         """Forget the previous frames (a cut in the video)."""
         self._box = self._last = None
 
-    def _find(self, image: np.ndarray, box: tuple[int, int, int, int] | None) -> F64 | None:
+    def _find(
+        self, image: np.ndarray, box: tuple[int, int, int, int] | None
+    ) -> tuple[F64 | None, F64 | None]:
+        """Return the marker's corners (4, 2), or None and, when ambiguous, every sighting's.
+
+        Ambiguous: the id read in several places with no previous frame to choose by (the
+        second item, (4 m, 2), the sightings' corners as detected).
+        """
         from imageform.geometry.aruco import detect_aruco_markers
 
         x0, y0, x1, y1 = box if box is not None else (0, 0, image.shape[1], image.shape[0])
@@ -419,19 +431,19 @@ class MarkerTracker:
         )
         hit = np.flatnonzero(found.ids == self.marker_id)
         if hit.size == 0:
-            return None
+            return None, None
         c = found.corners[hit] + np.array([x0, y0], np.float64)
-        last = self._last
-        if hit.size > 1 and last is not None and last.found:
+        best = hit[0]
+        if hit.size > 1:
+            last = self._last
+            if last is None or not last.found:
+                # no previous frame: nothing tells the marker from its second print
+                return None, np.asarray(c.reshape(-1, 2), np.float64)
             # the same id twice (a reflection, a second print): the sighting whose corners
             # are nearest the previous frame's (the marker followed)
             best = hit[int(np.argmin(np.linalg.norm(c - last.image_points, axis=2).mean(1)))]
-        else:
-            # or, without a previous frame: the least corrected, then the largest
-            size = np.abs(_cross2(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]))
-            best = hit[np.lexsort((-size, found.hamming[hit]))[0]]
         uv = np.asarray(found.corners[best], np.float64)
-        return self._refine(image[y0:y1, x0:x1], uv) + np.array([x0, y0], np.float64)
+        return self._refine(image[y0:y1, x0:x1], uv) + np.array([x0, y0], np.float64), None
 
     def _jumped(self, uv: F64) -> bool:
         """Whether corners ``uv`` lie more than half a side from the previous frame's."""
@@ -467,11 +479,16 @@ class MarkerTracker:
         h, w = a.shape[:2]
         uv, searched = None, "none"
         if self.predict and self._box is not None:
-            uv, searched = self._find(a, self._box), "box"
+            uv, _ = self._find(a, self._box)
+            searched = "box"
             if uv is not None and self._jumped(uv):
                 uv = None  # maybe a second print in the box: choose among the frame's
         if uv is None:
-            uv, searched = self._find(a, None), "frame"
+            uv, sightings = self._find(a, None)
+            searched = "frame"
+            if sightings is not None:
+                self._box = self._last = None
+                return _missing("ambiguous", sightings)
         if uv is None:
             return self._lost()
         try:

@@ -98,9 +98,12 @@ class BoardPose:
         The corners found (distorted pixels, as detected).
     object_points : ndarray (m, 3)
         The same corners on the board.
-    searched : {"tracked", "box", "frame", "none"}
+    searched : {"tracked", "box", "frame", "none", "ambiguous"}
         How the board was found: its corners tracked from the last frame, detected in the
-        predicted box, in the whole frame, or not at all.
+        predicted box, in the whole frame, or not at all; ``"ambiguous"`` (a marker
+        tracker's first frame, :class:`MarkerTracker`, :class:`MarkerMapTracker`): not
+        found because the target was read in two places and nothing in the frame tells
+        which is it (``image_points``: every sighting's corners).
     """
 
     found: bool

@@ -341,6 +341,7 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
     latency: list[float] = []
     last: Any = None
     found = 0
+    ambiguous = 0
     interrupted = False
     t0 = time.perf_counter()
     try:
@@ -366,6 +367,7 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
                         _fmt(pose.rms_px),
                     ]
                 )
+                ambiguous += pose.searched == "ambiguous"
                 if pose.found:
                     found += 1
                     rms.append(pose.rms_px)
@@ -379,6 +381,8 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
                     label = f"frame {frame.index}" + (
                         f"  {pose.corners} corners  rms {pose.rms_px:.2f} px"
                         if pose.found
+                        else "  marker read in two places"
+                        if pose.searched == "ambiguous"
                         else "  board not found"
                     )
                     drawn = draw_pose_overlay(
@@ -417,6 +421,11 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
         run.note(f"note: stopped by Ctrl-C after {n} frames; {out} is complete")
     if found == 0:
         run.note(f"note: the board was found in none of the {n} frames (check --board)")
+    if ambiguous:
+        run.note(
+            f"note: {ambiguous} of the {n} frames read a marker's id in two places with no "
+            "earlier pose to choose by: no pose there (is an id printed twice?)"
+        )
     deint = deinterlace_note(reader, info.fps)
     if deint:
         run.note(f"note: {deint}")
