@@ -20,7 +20,7 @@ from imageform._typing import Array, ArrayLike
 from imageform._validate import as_int, as_real, describe, format_shape
 from imageform.analysis._arrays import image_in
 from imageform.analysis._tissue_rules import keep_mask
-from imageform.analysis.macenko import _resolve_i0
+from imageform.analysis.macenko import BackgroundEstimate, _resolve_i0
 from imageform.errors import InvalidInputError
 
 __all__ = ["TISSUE_MASK_RULES", "tissue_mask"]
@@ -67,7 +67,7 @@ def tissue_mask(
     pen: bool = True,
     dark: bool = True,
     he: bool = False,
-    i0: Literal["auto"] | float | ArrayLike = "auto",
+    i0: Literal["auto"] | float | ArrayLike | BackgroundEstimate = "auto",
     beta: float = 0.15,
     pen_min_od: float = 0.3,
     dark_luminance: float = 0.08,
@@ -116,8 +116,9 @@ def tissue_mask(
       the lowest :math:`OD_G/OD_R`), and :math:`\lVert OD - (OD\cdot u)\,u\rVert` is the
       tissue's: under 0.15 (β) a pixel is ink over glass, otherwise tissue under the ink
       (smujiang/WSIPenMarkingRemoval's 48 blue-washed patches: 8.2 % of the tissue kept
-      before, 85.1 % now, at the median). The stain estimators' ``mask="auto"`` drops every
-      pixel of a wash instead (each holds the ink's OD). Red ink is eosin's colour and is not
+      before, 85.1 % now, at the median). The stain estimators' ``mask="auto"`` subtract the
+      ink's OD (each pixel holds it; the ink over glass nearby gives it) or, under dense
+      ink, drop every pixel (:func:`~imageform.analysis.macenko_stains`). Red ink is eosin's colour and is not
       found (as in HistoQC, which needs a model of its own for it). Tuned on spent tiles
       (``benchmarks/check_stain_ihc_fresh.py``, ``check_stain_artefacts.py``).
     - **dark** (``dark``): black ink, folds and debris: luma :math:`0.2125R + 0.7154G +
@@ -164,8 +165,10 @@ def tissue_mask(
         is found chunk by chunk).
     glass, pen, dark : bool
         Which rules apply (``he`` below).
-    i0 : "auto" or float or sequence of 3 floats
-        Incident light, as in :func:`~imageform.analysis.macenko_stains`.
+    i0 : "auto" or float or sequence of 3 floats or BackgroundEstimate
+        Incident light, as in :func:`~imageform.analysis.macenko_stains` (an
+        :func:`~imageform.analysis.estimate_background` of this image: not estimated
+        again).
     beta : float
         OD norm below which a pixel is glass (ln units, 0.15 as Macenko).
     pen_min_od : float
