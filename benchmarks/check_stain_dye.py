@@ -327,8 +327,10 @@ def _dye(pen: Path, tiles: Path, reach: int, share: float) -> None:
             ]
         )
     kept = []
+    he_rows = []
     for p in sorted(tiles.iterdir()):
         if not p.name.startswith(("deepliif", "qupath")):
+            he_rows.append(_he_row(p))
             continue
         img = _read(p)
         od = od_of(img)
@@ -359,6 +361,54 @@ def _dye(pen: Path, tiles: Path, reach: int, share: float) -> None:
     print()
     print(markdown_table(["Ki67 tile", "kept, auto", "kept, auto without edge dye"], kept))
     print()
+    cols = [
+        "tile",
+        "eosin's pink (of the absorbing pixels)",
+        "tissue_mask(he=False): H / E to the reference (deg)",
+        "he='auto': H / E (deg)",
+        "he='auto' kept (of he=False's)",
+    ]
+    print(markdown_table(cols, he_rows))
+    print()
+
+
+def _he_row(p: Path) -> list[str]:
+    """A tile without DAB: its eosin share, Macenko's H and E against Macenko's reference
+    vectors with the mask without and with ``he="auto"`` ("-" where the code has none).
+    """
+    from imageform.analysis import _tissue_rules as rules
+    from imageform.analysis import macenko_stains, stain_angle, tissue_mask
+    from imageform.analysis.synthetic import (
+        MACENKO_REFERENCE_EOSIN,
+        MACENKO_REFERENCE_HEMATOXYLIN,
+    )
+    from imageform.errors import InvalidInputError
+
+    img = _read(p)
+    f = img.astype(np.float32) / np.float32(255.0)
+    from imageform.analysis import estimate_background
+
+    od = rules._od(f, np.log(estimate_background(f).i0))
+    r, g, b = od[..., 0], od[..., 1], od[..., 2]
+    ab = r * r + g * g + b * b >= 0.15**2
+    pink = ab & (r < 0.5 * g) & (b < 0.8 * g)
+
+    def he_angles(mask: np.ndarray) -> str:
+        st = _try(lambda: macenko_stains(img, mask=mask))
+        if st is None:
+            return "refused"
+        s = np.asarray(st.stain_matrix)
+        h = stain_angle(s[0], MACENKO_REFERENCE_HEMATOXYLIN)
+        e = stain_angle(s[1], MACENKO_REFERENCE_EOSIN)
+        return f"{h:.1f} / {e:.1f}"
+
+    off = tissue_mask(img, glass=False)
+    row = [p.stem, f"{pink.sum() / max(int(ab.sum()), 1):.1%}", he_angles(off)]
+    try:
+        on = tissue_mask(img, glass=False, he="auto")
+    except InvalidInputError:
+        return [*row, "-", "-"]
+    return [*row, he_angles(on), f"{(on & off).sum() / max(int(off.sum()), 1):.2%}"]
 
 
 def _heldout(folder: Path, label: str) -> None:

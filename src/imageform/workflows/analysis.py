@@ -207,8 +207,9 @@ class StainNormalizeOptions(ImageIn, ImageOut, RgbFrom):
     )
     mask: str | None = option(
         None,
-        help="Pixels the statistics are taken on: auto (no pen ink, black ink, dark folds; "
-        "the default for macenko), he (also brown dye and grey, H&E only), none (every "
+        help="Pixels the statistics are taken on: auto (no pen ink, black ink, dark folds, "
+        "and brown dye and grey where the image holds eosin; the default for macenko), he "
+        "(also brown dye and grey, H&E only), none (every "
         "pixel; the default for reinhard) or a mask image (non-zero: use).",
         metavar="auto|he|none|FILE",
     )
@@ -281,11 +282,12 @@ def _stain_mask(
     size = pixel_size_um(path) if path is not None else None
     mpp = None if size is None else float(np.sqrt(size[0] * size[1])) * step
     sample = img[::step, ::step]
+    he: bool | Literal["auto"] = True if key == "he" else "auto"  # the H&E rules where eosin is
     if opts.method == "macenko":  # the estimator's own I0 and no glass rule, as mask="auto"
         if mpp is None:
             return key
-        return analysis.tissue_mask(sample, glass=False, he=key == "he", i0=i0, pixel_size_um=mpp)
-    return analysis.tissue_mask(sample, he=key == "he", pixel_size_um=mpp)
+        return analysis.tissue_mask(sample, glass=False, he=he, i0=i0, pixel_size_um=mpp)
+    return analysis.tissue_mask(sample, he=he, pixel_size_um=mpp)
 
 
 def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
