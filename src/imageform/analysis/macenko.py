@@ -860,8 +860,8 @@ def macenko_stains(
         (:func:`background_intensity`; 240/255 when the tile has none). The
         :func:`estimate_background` of this image, made once, is taken as ``"auto"``
         would make it (``i0_source`` "glass" or "default"), without estimating it again
-        (on a 6.6-megapixel slide the estimate takes about a fifth of this function's
-        time; :func:`~imageform.analysis.tissue_mask` takes it too).
+        (on a 6.6-megapixel slide the estimate takes about a tenth of this function's
+        CPU time; :func:`~imageform.analysis.tissue_mask` takes it too).
     base : {"e", "10"}
         Logarithm base of the OD (see :func:`optical_density`).
     method : {"macenko", "vahadane"}
