@@ -170,3 +170,49 @@ def test_cli_reports_the_fallback(tmp_path: Path, capsys: pytest.CaptureFixture[
     np.testing.assert_allclose(res["source_i0"], REFERENCE_I0)
     assert main([*argv, "--force"]) == 0
     assert "no glass found on the image: incident light I0 = 240/255" in capsys.readouterr().out
+
+
+def test_a_background_estimate_is_taken_as_auto() -> None:
+    """``i0=estimate_background(img)`` gives what ``"auto"`` gives, with its source, and is
+    not estimated again (the mask and the stains of one image share it)."""
+    from imageform.analysis import tissue_mask
+
+    data = pytest.importorskip("skimage.data")
+    ihc = np.asarray(data.immunohistochemistry())[::2, ::2]
+    est = estimate_background(ihc)
+    a, b = macenko_stains(ihc), macenko_stains(ihc, i0=est)
+    np.testing.assert_array_equal(a.stain_matrix, b.stain_matrix)
+    np.testing.assert_array_equal(a.max_concentrations, b.max_concentrations)
+    assert a.i0 == b.i0 and b.i0_source == "glass"
+    assert np.array_equal(tissue_mask(ihc), tissue_mask(ihc, i0=est))
+    pale = _tile(0.0, PALE[0], 7)
+    assert macenko_stains(pale, i0=estimate_background(pale)).i0_source == "default"
+    # macenko_normalize: the estimate is the image's, a target image gets its own
+    out = macenko_normalize(pale, ihc, i0=estimate_background(pale))
+    np.testing.assert_array_equal(out, macenko_normalize(pale, ihc))
+
+
+def test_stain_normalize_estimates_each_background_once(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """An Aperio TIFF (its pixel size read): the mask and the stains of the image and of the
+    target share one background estimate each (before: two each)."""
+    tifffile = pytest.importorskip("tifffile")
+    from imageform.analysis import macenko as mod
+    from imageform.cli import main
+
+    calls: list[int] = []
+    real = mod.estimate_background
+
+    def counted(*args: object, **kw: object) -> object:
+        calls.append(1)
+        return real(*args, **kw)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(mod, "estimate_background", counted)
+    monkeypatch.setattr("imageform.analysis.estimate_background", counted)
+    img8 = _tile(0.3, (1.9, 1.0), 100)
+    src = tmp_path / "s.tif"
+    tifffile.imwrite(src, img8, description="Aperio Image Library v12\n64 x 64 |MPP = 0.5|")
+    argv = ["stain-normalize", str(src), "-o", str(tmp_path / "o.png"), "--target", str(src)]
+    assert main(argv) == 0
+    assert len(calls) == 2  # the image's and the target's

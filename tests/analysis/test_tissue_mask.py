@@ -340,6 +340,29 @@ def test_he_rules_drop_brown_dye_and_grey() -> None:
     assert m.all(axis=1).tolist() == [False] * 3 + [True] * 2 + [False] * 3
 
 
+def test_he_auto_applies_the_he_rules_where_the_image_holds_eosin() -> None:
+    """Colour cannot tell a slide's yellow-brown margin dye from DAB; the eosin around it
+    tells H&E from IHC: he="auto" (the estimators' mask "auto") drops the dye on H&E only."""
+    he = np.full((32, 32, 3), (0.85, 0.45, 0.75))  # eosin-rich H&E: pink
+    he[:6] = (0.75, 0.6, 0.35)  # brown margin dye along the edge
+    ihc = he.copy()
+    ihc[6:] = (0.55, 0.5, 0.65)  # hematoxylin counterstain, no eosin: IHC
+    for img, dropped in ((he, True), (ihc, False)):
+        m = tissue_mask(img, i0=0.94, margin=0, he="auto")
+        assert bool(~m[:6].any()) is dropped
+        assert m[10:].all()
+        assert np.array_equal(m, tissue_mask(img, i0=0.94, margin=0, he=dropped))
+    # a batch: each image alone; the estimators' default mask is he="auto"
+    both = tissue_mask(np.stack([he, ihc]), i0=0.94, margin=0, he="AUTO")
+    assert both[0, :6].sum() == 0 and both[1, :6].all()
+    tile = np.tile(he, (4, 4, 1))
+    tile[:, ::2] = (0.7, 0.3, 0.6)  # denser eosin
+    tile[::2, 1::2] = (0.35, 0.3, 0.6)  # hematoxylin
+    tile[:6] = (0.75, 0.6, 0.35)
+    a, b = macenko_stains(tile, i0=0.94), macenko_stains(tile, i0=0.94, mask="he")
+    assert a.n_pixels == b.n_pixels < macenko_stains(tile, i0=0.94, mask=None).n_pixels
+
+
 def test_masks_agree_with_dask() -> None:
     da = pytest.importorskip("dask.array")
     img = _inked(_read("torchstain_target_crop.png"), _band((256, 256), 0.03), "green")
@@ -391,6 +414,7 @@ def test_stain_mixtures_are_never_pen(ref: int, c1: float, c2: float) -> None:
         ({"image": np.zeros((5, 3))}, r"shape \(\.\.\., H, W, 3\)"),
         ({"image": np.zeros((4, 4, 2))}, "3 channels"),
         ({"image": np.zeros((4, 4, 3)), "pen": "yes"}, "pen as True or False"),
+        ({"image": np.zeros((4, 4, 3)), "he": "yes"}, "he as True or False or 'auto'"),
         ({"image": np.zeros((4, 4, 3)), "margin": 65}, "margin"),
         ({"image": np.zeros((4, 4, 3)), "dark_luminance": 2.0}, "dark_luminance"),
         ({"image": np.zeros((4, 4, 3)), "beta": -1.0}, "beta"),
@@ -563,11 +587,12 @@ def test_pixel_size_of_microscopy_tiffs(tmp_path: Path) -> None:
 
 
 def test_stain_normalize_passes_the_files_pixel_size_um(tmp_path: Path) -> None:
-    """An OME TIFF at 0.125 um per pixel: a 40 x 8 black bar is nucleus-sized, kept."""
+    """An OME TIFF at 0.125 um per pixel: a 40 x 8 black bar is nucleus-sized, kept (IHC's
+    hematoxylin around it: on H&E, eosin's pink, the H&E rules take a grey bar anyway)."""
     tifffile = pytest.importorskip("tifffile")
     from imageform.workflows.analysis import StainNormalizeOptions, _stain_mask
 
-    img = np.full((1024, 1024, 3), (0.75, 0.55, 0.7))
+    img = np.full((1024, 1024, 3), (0.55, 0.45, 0.7))
     img[500:508, 500:540] = 0.03
     img8 = np.round(img * 255).astype(np.uint8)
     fine = tmp_path / "fine.ome.tif"
@@ -599,8 +624,9 @@ def test_ink_over_a_whole_patch_keeps_the_tissue_under_it() -> None:
     assert tissue_mask(clean)[truth].mean() > 0.99
 
 
-def test_stain_estimators_refuse_a_patch_under_ink() -> None:
-    """Each pixel of a washed patch holds the ink's OD: the estimators' default mask leaves
+def test_stain_estimators_refuse_a_patch_under_dense_ink() -> None:
+    """Each pixel of a washed patch holds the ink's OD; where the ink over the glass is
+    dense (this pair: OD norm 1.19, over the limit 1.1) the estimators' default mask leaves
     every pixel out (main: Macenko's stains 21.5 deg from the clean scan's, silently)."""
     from imageform.errors import DegenerateConfigurationError
 
@@ -609,6 +635,28 @@ def test_stain_estimators_refuse_a_patch_under_ink() -> None:
         macenko_stains(inked)
     macenko_stains(inked, mask=None)  # the algorithm alone still runs
     macenko_stains(clean)
+
+
+@pytest.mark.parametrize("ink", ["blue", "green"])
+def test_stains_under_a_light_wash_of_ink(ink: str) -> None:
+    """Beer-Lambert: the ink's OD adds to the tissue's. Under a light wash (the marker's OD
+    times 0.4-0.8 across the crop) the estimators subtract the ink's OD, measured on the
+    ink over the glass nearby, and keep the stains (before: refused; mask=None 25-37 deg)."""
+    img = _read("tiatoolbox_colon_crop.png")
+    thick = np.linspace(0.4, 0.8, img.shape[1])[None, :, None]
+    inked = np.clip(np.round(img * INK[ink][None, None, :] ** thick), 0, 255).astype(np.uint8)
+    ref = macenko_stains(img)
+    st = macenko_stains(inked)
+    none = macenko_stains(inked, mask=None)
+
+    def worst(a: Any) -> float:
+        return max(stain_angle(a.stain_matrix[i], ref.stain_matrix[i]) for i in range(2))
+
+    assert worst(st) < 7.0  # 6.5 blue, 5.2 green
+    assert worst(none) > 20.0  # 25.3, 37.3
+    ratio = np.asarray(st.max_concentrations) / np.asarray(ref.max_concentrations)
+    assert np.all(np.abs(ratio - 1.0) < 0.3)  # 0.99 / 0.78, 1.02 / 0.82
+    vahadane_stains(inked, max_pixels=2000, iterations=200)  # the same rule, no refusal
 
 
 def test_pale_stain_without_glass_is_no_wash() -> None:

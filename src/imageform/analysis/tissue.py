@@ -20,7 +20,7 @@ from imageform._typing import Array, ArrayLike
 from imageform._validate import as_int, as_real, describe, format_shape
 from imageform.analysis._arrays import image_in
 from imageform.analysis._tissue_rules import keep_mask
-from imageform.analysis.macenko import _resolve_i0
+from imageform.analysis.macenko import BackgroundEstimate, _resolve_i0
 from imageform.errors import InvalidInputError
 
 __all__ = ["TISSUE_MASK_RULES", "tissue_mask"]
@@ -55,7 +55,9 @@ TISSUE_MASK_RULES: MappingProxyType[str, str] = MappingProxyType(
         "he": "H&E slides only (he=True; DAB is brown and hematoxylin + DAB grey): yellow, "
         "orange and brown margin dye and pigment, OD_blue > 1.2 OD_green with OD_blue >= "
         "pen_min_od; grey (label, slide edge, dirt), max/min of the ODs <= 1.25 with mean "
-        "OD >= 0.3",
+        "OD >= 0.3. he='auto' (the stain estimators' mask 'auto'): on an image where at "
+        "least 5 % of the absorbing pixels are eosin's pink (OD_red < 0.5 OD_green, "
+        "OD_blue < 0.8 OD_green)",
     }
 )
 
@@ -66,8 +68,8 @@ def tissue_mask(
     glass: bool = True,
     pen: bool = True,
     dark: bool = True,
-    he: bool = False,
-    i0: Literal["auto"] | float | ArrayLike = "auto",
+    he: bool | Literal["auto"] = False,
+    i0: Literal["auto"] | float | ArrayLike | BackgroundEstimate = "auto",
     beta: float = 0.15,
     pen_min_od: float = 0.3,
     dark_luminance: float = 0.08,
@@ -116,10 +118,12 @@ def tissue_mask(
       the lowest :math:`OD_G/OD_R`), and :math:`\lVert OD - (OD\cdot u)\,u\rVert` is the
       tissue's: under 0.15 (β) a pixel is ink over glass, otherwise tissue under the ink
       (smujiang/WSIPenMarkingRemoval's 48 blue-washed patches: 8.2 % of the tissue kept
-      before, 85.1 % now, at the median). The stain estimators' ``mask="auto"`` drops every
-      pixel of a wash instead (each holds the ink's OD). Red ink is eosin's colour and is not
-      found (as in HistoQC, which needs a model of its own for it). Tuned on spent tiles
-      (``benchmarks/check_stain_ihc_fresh.py``, ``check_stain_artefacts.py``).
+      before, 85.1 % now, at the median). The stain estimators' ``mask="auto"`` subtract the
+      ink's OD (each pixel holds it; the ink over glass nearby gives it) or, under dense
+      ink, drop every pixel (:func:`~imageform.analysis.macenko_stains`). Red ink is
+      eosin's colour and is not found (as in HistoQC, which needs a model of its own for
+      it). Tuned on spent tiles (``benchmarks/check_stain_ihc_fresh.py``,
+      ``check_stain_artefacts.py``).
     - **dark** (``dark``): black ink, folds and debris: luma :math:`0.2125R + 0.7154G +
       0.0721B <` ``dark_luminance`` of the encoded values (HistoQC's dark-tissue rule, at
       0.15 there: 0.08 here, as 0.1-0.15 drops 1-3.5 % of the dense nuclei of real tiles),
@@ -130,7 +134,8 @@ def tissue_mask(
       ``dark_luminance`` or a neutral OD with mean OD ≥ 0.5) is a stroke as above (6
       times as long as wide when curved; no hole test: a fold holds paler pixels), or
       where the flags of a region are large.
-    - **he** (``he``, off by default): H&E slides only. Yellow, orange and brown margin
+    - **he** (``he``, off by default; ``"auto"``: where the image holds eosin): H&E
+      slides only. Yellow, orange and brown margin
       dye and pigment, :math:`OD_B > 1.2\, OD_G` (H&E absorb green more than blue), and
       grey (a label, the slide's edge, dirt): :math:`\max_c OD_c \le 1.25 \min_c OD_c`
       with mean OD ≥ 0.3. DAB is brown and hematoxylin + DAB grey: off for IHC.
@@ -164,14 +169,19 @@ def tissue_mask(
         is found chunk by chunk).
     glass, pen, dark : bool
         Which rules apply (``he`` below).
-    i0 : "auto" or float or sequence of 3 floats
-        Incident light, as in :func:`~imageform.analysis.macenko_stains`.
+    i0 : "auto" or float or sequence of 3 floats or BackgroundEstimate
+        Incident light, as in :func:`~imageform.analysis.macenko_stains` (an
+        :func:`~imageform.analysis.estimate_background` of this image: not estimated
+        again).
     beta : float
         OD norm below which a pixel is glass (ln units, 0.15 as Macenko).
     pen_min_od : float
         The least red OD of ink, in [0, 10].
-    he : bool
-        Also the H&E-only rules (brown dye, grey).
+    he : bool or "auto"
+        Also the H&E-only rules (brown dye, grey); ``"auto"``: on an image that holds
+        eosin (at least 5 % of its absorbing pixels eosin's pink, :math:`OD_R < 0.5\,OD_G`
+        and :math:`OD_B < 0.8\,OD_G`; IHC's hematoxylin and DAB are not), as the stain
+        estimators' ``mask="auto"`` does. Each image of a batch alone; a Dask array as one.
     dark_luminance : float
         Luma below which a pixel is dark, in [0, 1].
     margin : int
@@ -224,10 +234,14 @@ def tissue_mask(
         raise InvalidInputError(
             f"expected image of shape (..., H, W, 3), got {format_shape(tuple(rgb.shape))}"
         )
-    flags = {}
+    flags: dict[str, Any] = {}
     for name, val in (("glass", glass), ("pen", pen), ("dark", dark), ("he", he)):
+        if name == "he" and isinstance(val, str) and val.strip().lower() == "auto":
+            flags[name] = "auto"
+            continue
         if not isinstance(val, bool | np.bool_):
-            raise InvalidInputError(f"expected {name} as True or False, got {describe(val)}")
+            also = " or 'auto'" if name == "he" else ""
+            raise InvalidInputError(f"expected {name} as True or False{also}, got {describe(val)}")
         flags[name] = bool(val)
     beta = as_real(beta, "beta", minimum=0.0, maximum=10.0)
     params: dict[str, Any] = {

@@ -129,7 +129,9 @@ def _stain_stats(
         if method != "macenko" or microns is None:
             return measure(img)
         mpp = float(np.sqrt(microns[0] * microns[1])) * reduced
-        return measure(img, mask=analysis.tissue_mask(img, glass=False, pixel_size_um=mpp))
+        est = analysis.estimate_background(img)  # once, for the mask and the stains
+        mask = analysis.tissue_mask(img, glass=False, he="auto", i0=est, pixel_size_um=mpp)
+        return analysis.macenko_stains(img, mask=mask, i0=est)
 
     if stats_from == "level" and len(levels) < 2:
         raise InvalidInputError(

@@ -213,8 +213,9 @@ class StainNormalizeOptions(ImageIn, ImageOut, RgbFrom):
     )
     mask: str | None = option(
         None,
-        help="Pixels the statistics are taken on: auto (no pen ink, black ink, dark folds; "
-        "the default for macenko), he (also brown dye and grey, H&E only), none (every "
+        help="Pixels the statistics are taken on: auto (no pen ink, black ink, dark folds, "
+        "and brown dye and grey where the image holds eosin; the default for macenko), he "
+        "(also brown dye and grey, H&E only), none (every "
         "pixel; the default for reinhard) or a mask image (non-zero: use).",
         metavar="auto|he|none|FILE",
     )
@@ -254,13 +255,15 @@ def _stain_mask(
     target: bool = False,
     path: Path | None = None,
     step: int = 1,
+    i0: Any = "auto",
 ) -> Any:
     """Return what ``--mask`` means for one image's sample ``img[::step, ::step]``.
 
     A keyword (Macenko: the estimator makes its own mask on the sample) or booleans of the
     sample's shape. ``auto`` and ``he`` on a file that states its pixel size (``path``; OME or
     Aperio TIFF): :func:`~imageform.analysis.tissue_mask` with that ``pixel_size_um`` (times
-    ``step``), as booleans. A mask image is of the whole image's size, sampled alike.
+    ``step``), as booleans; Macenko's with ``i0``, the sample's background estimate that the
+    stains are measured with too. A mask image is of the whole image's size, sampled alike.
     """
     import numpy as np
 
@@ -285,13 +288,12 @@ def _stain_mask(
     size = pixel_size_um(path) if path is not None else None
     mpp = None if size is None else float(np.sqrt(size[0] * size[1])) * step
     sample = img[::step, ::step]
+    he: bool | Literal["auto"] = True if key == "he" else "auto"  # the H&E rules where eosin is
     if opts.method == "macenko":  # the estimator's own I0 and no glass rule, as mask="auto"
-        return (
-            key
-            if mpp is None
-            else analysis.tissue_mask(sample, glass=False, he=key == "he", pixel_size_um=mpp)
-        )
-    return analysis.tissue_mask(sample, he=key == "he", pixel_size_um=mpp)
+        if mpp is None:
+            return key
+        return analysis.tissue_mask(sample, glass=False, he=he, i0=i0, pixel_size_um=mpp)
+    return analysis.tissue_mask(sample, he=he, pixel_size_um=mpp)
 
 
 def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
@@ -312,14 +314,16 @@ def _stain_target(run: Run, opts: StainNormalizeOptions) -> Any:
             ) from None
     ref = _srgb(run, opts.target, opts, clip=True, frame=None)[1]
     step = _sample_step(ref)
-    mask = _stain_mask(opts, ref, target=True, path=opts.target, step=step)
     sample = ref[::step, ::step]
     if opts.method == "macenko":
-        return _macenko(sample, mask, f"--target {opts.target}")
+        est = analysis.estimate_background(sample)  # once, for the mask and the stains
+        mask = _stain_mask(opts, ref, target=True, path=opts.target, step=step, i0=est)
+        return _macenko(sample, mask, f"--target {opts.target}", est)
+    mask = _stain_mask(opts, ref, target=True, path=opts.target, step=step)
     return analysis.reinhard_stats(sample, mask)
 
 
-def _macenko(img: Any, mask: Any, what: str) -> Any:
+def _macenko(img: Any, mask: Any, what: str, i0: Any = "auto") -> Any:
     """:func:`~imageform.analysis.macenko_stains` of ``img``, its refusal in the command's words.
 
     The library's "mask=None keeps them" is ``--mask none`` here, and the message names the
@@ -329,7 +333,7 @@ def _macenko(img: Any, mask: Any, what: str) -> Any:
     from imageform.errors import DegenerateConfigurationError
 
     try:
-        return analysis.macenko_stains(img, mask=mask)
+        return analysis.macenko_stains(img, mask=mask, i0=i0)
     except DegenerateConfigurationError as exc:
         msg = str(exc).replace("mask=None keeps them", "--mask none keeps them")
         raise DegenerateConfigurationError(f"{what}: {msg}") from None
@@ -344,14 +348,16 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
     read_as, img, space = _srgb(run, image, opts, clip=True)
     stats = _stain_target(run, opts)
     step = _sample_step(img)  # the statistics of a large image from a regular sample
-    mask = _stain_mask(opts, img, path=image, step=step)
     sample = img[::step, ::step]
+    # the sample's background, estimated once for the mask and the stains
+    est = analysis.estimate_background(sample) if opts.method == "macenko" else "auto"
+    mask = _stain_mask(opts, img, path=image, step=step, i0=est)
     if step > 1:
         run.note(
             f"stain statistics measured on one row and column in {step} "
             f"({sample.shape[1]} x {sample.shape[0]} px), as chunked processing samples"
         )
-    source = _macenko(sample, mask, str(image)) if opts.method == "macenko" else None
+    source = _macenko(sample, mask, str(image), est) if opts.method == "macenko" else None
     if source is not None:
         result = analysis.macenko_normalize(img, stats, source=source)
     else:
