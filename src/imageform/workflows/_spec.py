@@ -342,6 +342,14 @@ class Input:
             raise TypeError(
                 f"expected metavar as a str (or None), got {type(self.metavar).__name__}"
             )
+        sfx = self.suffixes
+        if sfx is not None and not (
+            isinstance(sfx, tuple) and all(isinstance(x, str) and x.startswith(".") for x in sfx)
+        ):
+            raise TypeError(
+                f"expected suffixes as a tuple of suffixes ('.dng', ...) or None, got "
+                f"{type(sfx).__name__}"
+            )
 
 
 @dataclass(frozen=True)
