@@ -383,6 +383,20 @@ def test_dask_smoothing_keeps_the_graph_small() -> None:
         )
 
 
+def test_dask_pca_power_iteration_is_one_layer() -> None:
+    """pca's 60 power iterations run in one task per batch block on Dask (they made 689 graph
+    layers, 3391 tasks for 16 chunks), with the eager values."""
+    da = pytest.importorskip("dask.array")
+    big = da.zeros((512, 512, 3), chunks=(128, 128, 3)) + 0.5
+    lazy = estimate_illuminant(big, "pca", transfer="linear")
+    assert len(lazy.__dask_graph__().layers) < 100
+    assert len(lazy.__dask_graph__()) < 1_500
+    imgs = _foliage_scene(shape=(13, 17))[None] * np.array([1.0, 0.7])[:, None, None, None]
+    got = estimate_illuminant(da.from_array(imgs, chunks=(1, 7, 9, 3)), "pca", transfer="linear")
+    ref = estimate_illuminant(imgs, "pca", transfer="linear")
+    np.testing.assert_allclose(np.asarray(got), ref, rtol=1e-12)
+
+
 def test_dask_stencils_keep_the_chunks() -> None:
     """The Laplacian and gradient stencils run block by block with one pixel of overlap:
     slicing whole arrays by one pixel cut every chunk boundary into three (1024 x 1024 in 16

@@ -778,11 +778,32 @@ def _pca(xp: Any, lin: Any, q: float, w: Any = None) -> Any:
     m = xp.stack(
         [_pixel_mean(xp, (x * x[..., c : c + 1])[..., None, :, :]) for c in range(3)], axis=-2
     )
-    v = mean
-    for _ in range(_PCA_ITERATIONS):  # power iteration: the leading eigenvector
+    if is_dask_namespace(xp):
+        return _power_iteration_dask(m, mean)
+    return _power_iteration(xp, m, mean)
+
+
+def _power_iteration(xp: Any, m: Any, v: Any) -> Any:
+    """Iterate ``v`` (..., 3) towards the leading eigenvector of ``m`` (..., 3, 3)."""
+    for _ in range(_PCA_ITERATIONS):
         v = xp.sum(m * v[..., None, :], axis=-1)
         v = v / xp.maximum(xp.sqrt(xp.sum(v * v, axis=-1, keepdims=True)), 1e-300)
     return v
+
+
+def _power_iteration_dask(m: Any, v: Any) -> Any:
+    """:func:`_power_iteration` of Dask arrays in one task per batch block.
+
+    The 60 iterations on the lazy 3 x 3 matrices made 689 graph layers (2.5 s to build for
+    one image); each block runs the in-memory loop instead (the same arithmetic).
+    """
+    m = m.rechunk({m.ndim - 2: -1, m.ndim - 1: -1})
+    v = v[..., None, :].rechunk({v.ndim - 1: -1, v.ndim: -1})  # (..., 1, 3): m's axes
+
+    def block(mb: Any, vb: Any) -> Any:
+        return _power_iteration(namespace(mb), mb, vb[..., 0, :])[..., None, :]
+
+    return m.map_blocks(block, v, chunks=v.chunks, dtype=v.dtype)[..., 0, :]
 
 
 def _est_grayness_index(
