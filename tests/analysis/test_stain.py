@@ -254,6 +254,28 @@ def test_chunked_matches_in_memory(ihc: np.ndarray) -> None:
     np.testing.assert_allclose(rn_d.compute(), reinhard_normalize(x, target), atol=1e-4)
 
 
+def test_dask_fit_computes_its_quantiles_together() -> None:
+    """On Dask the exact percentiles of a fit share their passes (the background's three
+    channels, the two angles, the two concentrations): 33 computations of the whole graph
+    were 15.8 s for a 1024 x 1024 slide against 1.9 s in memory; now 14, the same numbers."""
+    da = pytest.importorskip("dask.array")
+    from dask.callbacks import Callback
+
+    class _Count(Callback):  # type: ignore[misc]
+        n = 0
+
+        def _start(self, dsk: object) -> None:
+            _Count.n += 1
+
+    slide, _, _ = synthetic_stain_image((48, 48), rng=0)
+    with _Count():
+        got = macenko_stains(da.from_array(slide, chunks=(24, 24, 3)))
+    assert _Count.n <= 14
+    ref = macenko_stains(slide)
+    np.testing.assert_allclose(got.stain_matrix, ref.stain_matrix, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(got.max_concentrations, ref.max_concentrations, rtol=1e-12)
+
+
 def test_normalise_ihc_to_a_target_and_back(ihc: np.ndarray) -> None:
     """scikit-image's IHC slide normalised to a synthetic H-DAB reference, and vice versa."""
     b, _, _ = synthetic_stain_image(stains=(RUIFROK_HEMATOXYLIN, RUIFROK_DAB), rng=1)

@@ -37,7 +37,7 @@ from imageform._validate import (
     real_array,
 )
 from imageform.analysis._arrays import (
-    exact_quantile,
+    exact_quantiles,
     image_in,
     is_dask,
     read_json,
@@ -293,7 +293,7 @@ def estimate_background(
     flat = rgb.reshape((-1, 3))
     if is_dask(flat):
         i0 = np.array(
-            [exact_quantile(flat[:, c].astype(np.float64), float(percentile)) for c in range(3)]
+            exact_quantiles([(flat[:, c].astype(np.float64), float(percentile)) for c in range(3)])
         )
     else:  # channel by channel, as float64 (a contiguous copy partitions faster): the same
         arr = np.asarray(flat)
@@ -679,7 +679,7 @@ def _fit(
     phi = np.arctan2(proj[:, 1], proj[:, 0])
     if lazy:
         phi_k = phi[keep]
-        lo, hi = exact_quantile(phi_k, alpha), exact_quantile(phi_k, 100.0 - alpha)
+        lo, hi = exact_quantiles([(phi_k, alpha), (phi_k, 100.0 - alpha)])
     else:
         phi_k = phi[keep]
         lo, hi = (float(v) for v in np.percentile(phi_k, [alpha, 100.0 - alpha]))
@@ -722,7 +722,7 @@ def _max_conc(
         n = keep.sum().compute()
         if int(n) == 0:
             keep = keep | True
-        return np.array([exact_quantile(c[:, i][keep], percentile) for i in range(2)])
+        return np.array(exact_quantiles([(c[:, i][keep], percentile) for i in range(2)]))
     tissue = c[keep]
     return np.percentile(tissue if tissue.shape[0] else c, percentile, axis=0)
 

@@ -285,6 +285,32 @@ def _blur(xp: Any, x: Any, sigma: float) -> Any:
     return _gauss_smooth(xp, _gauss_smooth(xp, x, sigma, -3), sigma, -2)
 
 
+def _interior(xp: Any, fn: Callable[[Any], Any], x: Any, channels: bool) -> Any:
+    """Apply ``fn``, a 3 x 3 stencil giving the interior pixels, to ``x``.
+
+    ``x`` is (..., H, W, C) (``channels``) or (..., H, W); ``fn(x)`` is (..., H - 2, W - 2[, C]).
+
+    On Dask, ``fn`` runs block by block on each block grown by one pixel (``map_overlap``; the
+    same sums, so the eager values) and the image's one-pixel rim is cut off at the end.
+    Slicing whole arrays by one pixel instead cut every chunk boundary into three chunks (a
+    1024 x 1024 grayness index in 16 chunks ran on 100, at 3.4 x the eager time).
+    """
+    if not is_dask_namespace(xp):
+        return fn(x)
+    import dask.array as da
+
+    rows = x.ndim - (3 if channels else 2)
+    axes = (rows, rows + 1)
+    if min(x.shape[a] for a in axes) < 3:
+        return fn(x)  # no interior pixel: the whole-array slices
+    depth = {i: (1 if i in axes else 0) for i in range(x.ndim)}
+    bnd = {i: ("nearest" if i in axes else "none") for i in range(x.ndim)}
+    full = da.map_overlap(
+        fn, x, depth=depth, boundary=bnd, trim=False, chunks=x.chunks, dtype=x.dtype
+    )
+    return full[(..., slice(1, -1), slice(1, -1)) + ((slice(None),) if channels else ())]
+
+
 def _gray_edge(xp: Any, lin: Any, p: float, sigma: float, w: Any = None) -> Any:
     x = lin
     if sigma > 0 and w is None:
@@ -295,18 +321,50 @@ def _gray_edge(xp: Any, lin: Any, p: float, sigma: float, w: Any = None) -> Any:
         # not bleed into it and make edges of their own
         den = _blur(xp, w[..., None], sigma)
         x = _blur(xp, x * w[..., None], sigma) / xp.where(den > 0, den, 1.0)
+    mag = _interior(xp, _gradient_magnitude, x, True)
+    if w is not None:  # a derivative is kept when its whole stencil is
+        w = _interior(xp, _stencil_product, w, False)
+    return _minkowski(xp, mag, p, w)
+
+
+def _gradient_magnitude(x: Any) -> Any:
+    """Central-difference gradient magnitude of (..., H, W, C) on the interior pixels."""
     gy = (x[..., 2:, 1:-1, :] - x[..., :-2, 1:-1, :]) * 0.5
     gx = (x[..., 1:-1, 2:, :] - x[..., 1:-1, :-2, :]) * 0.5
-    mag = xp.sqrt(gx * gx + gy * gy)
-    if w is not None:  # a derivative is kept when its whole stencil is
-        w = (
-            w[..., 1:-1, 1:-1]
-            * w[..., :-2, 1:-1]
-            * w[..., 2:, 1:-1]
-            * w[..., 1:-1, :-2]
-            * w[..., 1:-1, 2:]
-        )
-    return _minkowski(xp, mag, p, w)
+    return namespace(x).sqrt(gx * gx + gy * gy)
+
+
+def _stencil_product(w: Any) -> Any:
+    """Multiply (..., H, W) over each interior pixel's 5-point stencil."""
+    return (
+        w[..., 1:-1, 1:-1]
+        * w[..., :-2, 1:-1]
+        * w[..., 2:, 1:-1]
+        * w[..., 1:-1, :-2]
+        * w[..., 1:-1, 2:]
+    )
+
+
+def _stencil_all(ok: Any) -> Any:
+    """Whether a (..., H, W) boolean is true over each interior pixel's 5-point stencil."""
+    return (
+        ok[..., 1:-1, 1:-1]
+        & ok[..., :-2, 1:-1]
+        & ok[..., 2:, 1:-1]
+        & ok[..., 1:-1, :-2]
+        & ok[..., 1:-1, 2:]
+    )
+
+
+def _laplacian(x: Any) -> Any:
+    """Take the 5-point Laplacian of (..., H, W, C) on the interior pixels."""
+    return (
+        x[..., :-2, 1:-1, :]
+        + x[..., 2:, 1:-1, :]
+        + x[..., 1:-1, :-2, :]
+        + x[..., 1:-1, 2:, :]
+        - 4.0 * x[..., 1:-1, 1:-1, :]
+    )
 
 
 def _pixel_mean(xp: Any, x: Any) -> Any:
@@ -673,23 +731,10 @@ def _log_laplacian(xp: Any, lin: Any, sigma: float, w: Any = None) -> tuple[Any,
     x = xp.log(xp.maximum(lin, floor))
     if sigma > 0:
         x = _gauss_smooth(xp, _gauss_smooth(xp, x, sigma, -3), sigma, -2)
-    lap = (
-        x[..., :-2, 1:-1, :]
-        + x[..., 2:, 1:-1, :]
-        + x[..., 1:-1, :-2, :]
-        + x[..., 1:-1, 2:, :]
-        - 4.0 * x[..., 1:-1, 1:-1, :]
-    )
+    lap = _interior(xp, _laplacian, x, True)
     # a candidate's whole stencil is unclipped: next to a clipped or black pixel (a masked
     # region) the Laplacian measures the floor, not the surface
-    ok = (
-        ok[..., 1:-1, 1:-1]
-        & ok[..., :-2, 1:-1]
-        & ok[..., 2:, 1:-1]
-        & ok[..., 1:-1, :-2]
-        & ok[..., 1:-1, 2:]
-        & (xp.max(xp.abs(lap), axis=-1) >= GI_MIN_CONTRAST)
-    )
+    ok = _interior(xp, _stencil_all, ok, False) & (xp.max(xp.abs(lap), axis=-1) >= GI_MIN_CONTRAST)
     return lap, ok
 
 
@@ -733,11 +778,32 @@ def _pca(xp: Any, lin: Any, q: float, w: Any = None) -> Any:
     m = xp.stack(
         [_pixel_mean(xp, (x * x[..., c : c + 1])[..., None, :, :]) for c in range(3)], axis=-2
     )
-    v = mean
-    for _ in range(_PCA_ITERATIONS):  # power iteration: the leading eigenvector
+    if is_dask_namespace(xp):
+        return _power_iteration_dask(m, mean)
+    return _power_iteration(xp, m, mean)
+
+
+def _power_iteration(xp: Any, m: Any, v: Any) -> Any:
+    """Iterate ``v`` (..., 3) towards the leading eigenvector of ``m`` (..., 3, 3)."""
+    for _ in range(_PCA_ITERATIONS):
         v = xp.sum(m * v[..., None, :], axis=-1)
         v = v / xp.maximum(xp.sqrt(xp.sum(v * v, axis=-1, keepdims=True)), 1e-300)
     return v
+
+
+def _power_iteration_dask(m: Any, v: Any) -> Any:
+    """:func:`_power_iteration` of Dask arrays in one task per batch block.
+
+    The 60 iterations on the lazy 3 x 3 matrices made 689 graph layers (2.5 s to build for
+    one image); each block runs the in-memory loop instead (the same arithmetic).
+    """
+    m = m.rechunk({m.ndim - 2: -1, m.ndim - 1: -1})
+    v = v[..., None, :].rechunk({v.ndim - 1: -1, v.ndim: -1})  # (..., 1, 3): m's axes
+
+    def block(mb: Any, vb: Any) -> Any:
+        return _power_iteration(namespace(mb), mb, vb[..., 0, :])[..., None, :]
+
+    return m.map_blocks(block, v, chunks=v.chunks, dtype=v.dtype)[..., 0, :]
 
 
 def _est_grayness_index(
