@@ -257,7 +257,8 @@ def test_chunked_matches_in_memory(ihc: np.ndarray) -> None:
 def test_dask_fit_computes_its_quantiles_together() -> None:
     """On Dask the exact percentiles of a fit share their passes (the background's three
     channels, the two angles, the two concentrations): 33 computations of the whole graph
-    were 15.8 s for a 1024 x 1024 slide against 1.9 s in memory; now 14, the same numbers."""
+    were 15.8 s for a 1024 x 1024 slide against 1.9 s in memory; now 14, the same numbers, and
+    one more for the eosin share that decides whether the H&E rules of the mask apply."""
     da = pytest.importorskip("dask.array")
     from dask.callbacks import Callback
 
@@ -270,7 +271,7 @@ def test_dask_fit_computes_its_quantiles_together() -> None:
     slide, _, _ = synthetic_stain_image((48, 48), rng=0)
     with _Count():
         got = macenko_stains(da.from_array(slide, chunks=(24, 24, 3)))
-    assert _Count.n <= 14
+    assert _Count.n <= 15
     ref = macenko_stains(slide)
     np.testing.assert_allclose(got.stain_matrix, ref.stain_matrix, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(got.max_concentrations, ref.max_concentrations, rtol=1e-12)
