@@ -86,6 +86,76 @@ def test_in_locus() -> None:
         in_locus([0.3, 0.3, 0.3])
 
 
+def _in_polygon_every_edge(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """The test of every edge that in_locus ran before its slab table (the reference)."""
+    x1, y1 = poly[:, 0].astype(pts.dtype), poly[:, 1].astype(pts.dtype)
+    x2, y2 = np.roll(x1, -1), np.roll(y1, -1)
+    x, y = pts[..., 0][..., None], pts[..., 1][..., None]
+    crosses = (y1 > y) != (y2 > y)
+    dy = y2 - y1
+    xint = x1 + (y - y1) * (x2 - x1) / np.where(dy == 0, 1.0, dy).astype(pts.dtype)
+    return np.sum((crosses & (x < xint)).astype(np.int32), axis=-1) % 2 == 1
+
+
+def _locus_probes(poly: np.ndarray, dtype: type, seed: int = 0) -> np.ndarray:
+    """Random points, the vertices, points on the edges and a hair off them, the red corner."""
+    rng = np.random.default_rng(seed)
+    p = poly.astype(dtype)
+    q = np.roll(p, -1, axis=0)
+    i = rng.integers(0, len(p), 4000)
+    on = p[i] + (q[i] - p[i]) * rng.uniform(0, 1, (4000, 1))
+    return np.concatenate(
+        [
+            rng.uniform(-0.05, 0.9, (6000, 2)),
+            p,
+            on,
+            on + rng.normal(0, 1e-7, on.shape),
+            p[300:].mean(axis=0) + rng.uniform(-3e-3, 3e-3, (4000, 2)),  # the jagged red end
+            [[0.7347, 0.2653], [-1e30, 0.3], [1e30, 0.3], [0.3, -1e30], [0.3, 1e30]],
+        ]
+    ).astype(dtype)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize(("coords", "observer"), [("xy", 2), ("uv", 2), ("xy", 10), ("uv", 10)])
+def test_in_locus_answers_as_every_edge(coords: str, observer: int, dtype: type) -> None:
+    """The slab table gives the answers of the test of every edge, boundary points included."""
+    poly = spectral_locus(observer=observer, coords=coords).chromaticities
+    pts = _locus_probes(poly, dtype)
+    want = _in_polygon_every_edge(pts, poly)
+    assert 0 < want.sum() < want.size
+    got = in_locus(pts, coords, observer=observer)
+    np.testing.assert_array_equal(got, want)
+    grid = pts[:4096].reshape(16, 16, 16, 2)  # any leading shape, a single point
+    np.testing.assert_array_equal(
+        in_locus(grid, coords, observer=observer), want[:4096].reshape(16, 16, 16)
+    )
+    assert in_locus(pts[0], coords, observer=observer) == want[0]
+
+
+@pytest.mark.parametrize("backend", ["torch", "array_api_strict"])
+def test_in_locus_backends_answer_as_numpy(backend: str) -> None:
+    """PyTorch (its host path) and array-api-strict (the device path) agree with NumPy."""
+    poly = spectral_locus().chromaticities
+    for dtype in (np.float64, np.float32):
+        pts = _locus_probes(poly, dtype, seed=1)
+        got = in_locus(to_backend(pts, backend, np.dtype(dtype).name))
+        np.testing.assert_array_equal(to_np(got), _in_polygon_every_edge(pts, poly))
+
+
+def test_in_locus_device_path_answers_as_numpy(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The device path (every point against the widest slab), run on CPU tensors, agrees."""
+    torch = pytest.importorskip("torch")
+    from imageform.color import chromaticity
+
+    poly = spectral_locus().chromaticities
+    pts = _locus_probes(poly, np.float32, seed=2)
+    xp = chromaticity.namespace(torch.zeros(1))
+    monkeypatch.setattr(chromaticity, "_host_view", lambda a: None)
+    got = chromaticity._points_in_polygon(torch.from_numpy(pts), poly, xp)
+    np.testing.assert_array_equal(got.numpy(), _in_polygon_every_edge(pts, poly))
+
+
 def test_xy_to_xyz_refuses_colours_outside_the_locus() -> None:
     from imageform.color import xy_to_xyz
 
