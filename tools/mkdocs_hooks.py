@@ -99,6 +99,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "horizon-natural": "benchmarks/check_horizon_natural.py",
     "local-homography": "benchmarks/check_local_homography.py",
     "lsd": "benchmarks/bench_lsd.py",
+    "locus": "benchmarks/bench_locus.py",
     "odd-files": "benchmarks/check_odd_files.py",
     "partial-board": "benchmarks/check_partial_board.py",
     "plumb-line": "benchmarks/check_plumb_line.py",

@@ -213,21 +213,21 @@ def visible_area(coords: str = "xy", *, observer: int = 2) -> float:
 
 
 #: Slabs crossed by more edges than this are tested apart on NumPy (the jagged red end).
-_LIGHT_EDGES = 4
+_LIGHT_EDGES = 2
 
 
 @lru_cache(maxsize=16)
 def _polygon_slabs(
     vertices: bytes, n: int, dtype: str
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+) -> tuple[np.ndarray, tuple[np.ndarray, ...], np.ndarray, tuple[np.ndarray, ...]]:
     """Tabulate the edges each horizontal slab of a polygon crosses, in ``dtype`` (cached).
 
-    Returns the distinct vertex ordinates ``v`` (sorted), the table (len(v) + 1, 4, K) of
+    Returns the distinct vertex ordinates ``v`` (sorted), the tables (len(v) + 1, K) of
     ``x1, y1, x2 - x1, y2 - y1`` of the edges crossed by row ``searchsorted(v, y,
     side="right")`` (padded with ``x1`` NaN, ``y1 = 0``, ``x2 - x1 = 0``, ``y2 - y1 = 1``:
     an intersection at NaN, right of no point, not even ``x = -inf``), each row's count and
-    the light width :data:`_LIGHT_EDGES`. For ``v[k-1] <= y < v[k]`` a vertex ordinate
-    ``y1`` has ``y1 > y`` exactly when ``y1 > v[k-1]``, so the edges with
+    the tables cut to their first :data:`_LIGHT_EDGES` columns. For ``v[k-1] <= y < v[k]``
+    a vertex ordinate ``y1`` has ``y1 > y`` exactly when ``y1 > v[k-1]``, so the edges with
     ``(y1 > y) != (y2 > y)`` are the same for every ``y`` of the slab; below ``v[0]`` and
     from ``v[-1]`` on none are.
     """
@@ -242,21 +242,22 @@ def _polygon_slabs(
     cross[1:] = (y1 > v[:, None]) != (y2 > v[:, None])
     counts = cross.sum(axis=1)
     k = max(int(counts.max()), 1)
-    table = np.empty((v.size + 1, 4, k), dtype=dt)
-    table[...] = np.array([np.nan, 0, 0, 1], dtype=dt)[:, None]
+    table = np.empty((4, v.size + 1, k), dtype=dt)
+    table[...] = np.array([np.nan, 0, 0, 1], dtype=dt)[:, None, None]
     for r in np.flatnonzero(counts):
-        table[r, :, : counts[r]] = params[:, cross[r]]
-    for a in (v, table, counts):
+        table[:, r, : counts[r]] = params[:, cross[r]]
+    light = tuple(np.ascontiguousarray(t[:, : min(k, _LIGHT_EDGES)]) for t in table)
+    for a in (v, table, counts, *light):
         a.setflags(write=False)
-    return v, table, counts, min(k, _LIGHT_EDGES)
+    return v, tuple(table), counts, light
 
 
 def _crossings(x: Any, y: Any, edges: Any, xp: Any) -> Any:
-    """Count the slab's edges (N, 4, K) right of each point (N,): ``x < x1 + (y - y1) dx/dy``.
+    """Count the slab's edges (4 x (N, K)) right of each point (N,): ``x < x1 + (y - y1) dx/dy``.
 
     The same expression, in the same order and dtype, as a test of every edge.
     """
-    x1, y1, dx, dy = (edges[:, i, :] for i in range(4))
+    x1, y1, dx, dy = edges
     xint = x1 + (y[:, None] - y1) * dx / dy
     if xp is np:
         return np.count_nonzero(x[:, None] < xint, axis=-1)
@@ -296,17 +297,17 @@ def _points_in_polygon(pts: Any, poly: np.ndarray, xp: Any) -> Any:
     if host is not None:
         x, y = host[:, 0], host[:, 1]
         row = np.searchsorted(v, y, side="right")
-        n = _crossings(x, y, table[:, :, :light][row], np)
-        many = np.flatnonzero(counts[row] > light)  # the few points of the crowded slabs
+        n = _crossings(x, y, [np.take(t, row, axis=0) for t in light], np)
+        many = np.flatnonzero(counts[row] > light[0].shape[1])  # the crowded slabs' points
         if many.size:
-            n[many] = _crossings(x[many], y[many], table[row[many]], np)
+            n[many] = _crossings(x[many], y[many], [t[row[many]] for t in table], np)
         n = xp.asarray(n, device=device_of(pts))
     else:  # a device (or array-api-strict): every point against the widest slab's K edges
         dev = device_of(pts)
         x, y = flat[:, 0], xp.asarray(flat[:, 1], copy=True)  # contiguous for searchsorted
         row = xp.searchsorted(xp.asarray(np.array(v), device=dev), y, side="right")
-        t = xp.asarray(np.array(table), device=dev)
-        n = _crossings(x, y, xp.take(t, row, axis=0), xp)
+        table = tuple(xp.asarray(np.array(t), device=dev) for t in table)
+        n = _crossings(x, y, [xp.take(t, row, axis=0) for t in table], xp)
     return xp.reshape(n, pts.shape[:-1]) % 2 == 1
 
 
