@@ -18,7 +18,12 @@ is a folder of their own, so that they fill nothing the timed runs use.
 repetition takes a new folder per command. ``--warm-cache``: also time ``imageform cache
 --warm`` into a new empty folder, then the same command again from a copy of the package at
 another path (a second clone or a reinstall of the same version on the same machine: it
-should find everything compiled). ``--profile``: each first run also records the CPU seconds
+should find everything compiled); ``--after-warm CMDS`` then also times those commands on a copy
+of the cache that ``imageform cache --warm`` alone filled (what a user who ran it after
+installing waits). ``--against DIR``: the same commands from another source tree (the code
+before a change), interleaved with this one's (the order alternating between repetitions), each
+on its own empty cache: a second table gives both, and their difference first - warm.
+``--profile``: each first run also records the CPU seconds
 numba spends compiling each kernel (numba's ``numba:compile`` events; nested compilations
 are counted inside their caller) and prints the largest per command. The table gives
 medians, the range, and the load average at the start and at the end (the machine is shared;
@@ -44,6 +49,7 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data"
 KODAK = DATA / "kodak" / "kodim01.png"
 KODAK2 = DATA / "kodak" / "kodim02.png"
+LAKE = DATA / "kodak" / "kodim16.png"  # a lake and its horizon
 BOARDS = DATA / "opencv-left"
 
 _INPUTS = r"""
@@ -125,6 +131,29 @@ for i, pose in enumerate(sfm_scenes.poses(16)[:8]):
     frame = sfm_scenes.render(K, pose, (320, 240), rng=rng)
     write_image(room / "frames" / f"view{i}.png", frame)
 write_camera(room / "camera.toml", Camera(K, image_size=(320, 240)))
+"""
+
+# imageform track's inputs: 8 frames (640 x 360) of a ChArUco board on a photograph
+# (tests/video_scenes.py, as tests/workflows/test_track.py), 6 frames of one ArUco marker,
+# and their camera file
+_TRACK = r"""
+import sys
+from pathlib import Path
+import numpy as np
+sys.path.insert(0, sys.argv[2])
+from tests import video_scenes
+from imageform.geometry import Camera
+from imageform.io import write_camera, write_image
+
+w = Path(sys.argv[1])
+K = np.array([[520.0, 0, 319.5], [0, 520.0, 179.5], [0, 0, 1]])
+write_camera(w / "track-camera.toml", Camera(K, image_size=(640, 360)))
+video_scenes.write_video(w / "charuco", K, 8, (640, 360))
+(w / "marker").mkdir()
+rng = np.random.default_rng(3)
+for i, pose in enumerate(video_scenes.marker_poses(6)):
+    frame = video_scenes.marker_frame(K, pose, (640, 360), rng=rng)
+    write_image(w / "marker" / f"frame{i:04d}.png", frame[..., None])
 """
 
 
@@ -309,9 +338,43 @@ def _commands(w: Path) -> dict[str, list[str]]:
             f"{o}/z.tif",
             "--force",
         ],
+        "track-charuco": [
+            "track",
+            str(w / "charuco"),
+            "--camera",
+            str(w / "track-camera.toml"),
+            "--board",
+            "charuco:7x5",
+            "--square",
+            "30mm",
+            "--marker",
+            "22mm",
+            "--dictionary",
+            "5x5_100",
+            "-o",
+            f"{o}/track.csv",
+            "--force",
+        ],
+        "track-aruco": [
+            "track",
+            str(w / "marker"),
+            "--camera",
+            str(w / "track-camera.toml"),
+            "--board",
+            "aruco:7",
+            "--marker",
+            "40mm",
+            "--dictionary",
+            "4x4_50",
+            "-o",
+            f"{o}/marker.csv",
+            "--force",
+        ],
         "vanishing": ["vanishing", str(stage), "--json"],
+        "horizon": ["horizon", str(LAKE), "--json"],
         "lens": ["lens", "--focal", "50mm", "--f-number", "2.8", "--focus", "2m"],
         "sfr": ["sfr", str(lab / "edge" / "edge.dng")],  # the lab set writes its edge as a DNG
+        "info": ["info", str(w / "raw.dng"), "--json"],
         "convert": [
             "convert",
             str(KODAK),
@@ -329,6 +392,15 @@ def _commands(w: Path) -> dict[str, list[str]]:
         "gamut": ["gamut", "--spaces", "srgb,display-p3,rec2020", "--json"],
         "palette-check": ["palette-check", "#E69F00,#56B4E9,#009E73"],
         "develop": ["develop", str(w / "raw.dng"), "-o", f"{o}/dev.png", "--force"],
+        "develop-rolloff": [
+            "develop",
+            str(w / "raw.dng"),
+            "--auto-bright",
+            "--highlight-rolloff",
+            "-o",
+            f"{o}/dev-roll.png",
+            "--force",
+        ],
         "mosaic": ["mosaic", str(KODAK), "-o", f"{o}/mos.png", "--force"],
         "demosaic": ["demosaic", str(w / "mosaic.png"), "-o", f"{o}/rgb.png", "--force"],
         "emva": ["emva", str(lab), "-o", f"{o}/emva.json", "--force"],
@@ -349,6 +421,7 @@ def _commands(w: Path) -> dict[str, list[str]]:
             f"{o}/corr.json",
             "--force",
         ],
+        "flatfield": ["flatfield", str(w / "many"), "-o", f"{o}/flat", "--force"],
         "harmonize": [
             "harmonize",
             str(KODAK),
@@ -420,6 +493,7 @@ def _inputs(python: str, src: Path | None, w: Path) -> None:
 
     subprocess.run([python, "-c", _INPUTS, str(w)], env=env, check=True)
     subprocess.run([python, "-c", _ROOM, str(w), str(ROOT)], env=env, check=True)
+    subprocess.run([python, "-c", _TRACK, str(w), str(ROOT)], env=env, check=True)
     im("mosaic", str(KODAK), "-o", str(w / "mosaic.png"))
     im("simulate", "-o", str(w / "sim0"))
     im(
@@ -458,9 +532,19 @@ def main() -> None:
     ap.add_argument("--profile", action="store_true", help="seconds compiling, per kernel")
     ap.add_argument("--inputs", type=Path, default=None, help="reuse (or make) inputs here")
     ap.add_argument("--write", type=Path, default=None, help="append the table to this file")
+    ap.add_argument(
+        "--against", type=Path, default=None, help="another src tree (before): interleaved A/B"
+    )
+    ap.add_argument(
+        "--after-warm",
+        default="",
+        help="commands (comma-separated, or all) also timed on a copy of the cache that "
+        "'imageform cache --warm' filled (with --warm-cache)",
+    )
     a = ap.parse_args()
     python = a.python or sys.executable
     src = None if a.python else a.src.resolve()
+    against = a.against.resolve() if a.against and src is not None else None
     load0 = _load()
     with tempfile.TemporaryDirectory(prefix="if-first-run-") as tmp:
         work = Path(tmp)
@@ -477,24 +561,34 @@ def main() -> None:
         warm: dict[str, list[tuple[float, float]]] = {n: [] for n in names}
         compiled: dict[str, list[dict[str, object]]] = {}
         warming: list[tuple[float, float]] = []
+        after_warm: dict[str, list[tuple[float, float]]] = {}
         clone: list[tuple[float, float]] = []
+        # --against: the same command from the other tree, right after or before (the order
+        # alternates between repetitions), on its own empty cache
+        before: dict[str, list[tuple[float, float]]] = {n: [] for n in names}
+        before_warm: dict[str, list[tuple[float, float]]] = {n: [] for n in names}
         for i in range(a.repeat):
             for name in names:
-                cache = work / f"cache-{name}-{i}"
-                cache.mkdir()
-                env = _env(src, cache)
-                prof = work / f"prof-{name}.json" if a.profile and i == 0 else None
-                first[name].append(_run(python, commands[name], env, work, prof))
-                warm[name].append(_run(python, commands[name], env, work))
-                shutil.rmtree(cache, ignore_errors=True)
-                (f, fc), (m, mc) = first[name][-1], warm[name][-1]
-                print(
-                    f"{name} #{i}: first {f:.2f} s ({fc:.2f} CPU), warm {m:.2f} s ({mc:.2f} CPU)"
-                    f" (load {_load()})",
-                    flush=True,
-                )
-                if prof is not None:
-                    compiled[name] = json.loads(prof.read_text())
+                trees = [("", src), ("before", against)] if against else [("", src)]
+                for label, tree in trees if i % 2 == 0 else trees[::-1]:
+                    cache = work / f"cache-{name}-{i}{label}"
+                    cache.mkdir()
+                    env = _env(tree, cache)
+                    mine = label == ""
+                    prof = work / f"prof-{name}.json" if a.profile and i == 0 and mine else None
+                    one = _run(python, commands[name], env, work, prof)
+                    again = _run(python, commands[name], env, work)
+                    (first if mine else before)[name].append(one)
+                    (warm if mine else before_warm)[name].append(again)
+                    shutil.rmtree(cache, ignore_errors=True)
+                    (f, fc), (m, mc) = one, again
+                    print(
+                        f"{name}{' (before)' if label else ''} #{i}: first {f:.2f} s ({fc:.2f} "
+                        f"CPU), warm {m:.2f} s ({mc:.2f} CPU) (load {_load()})",
+                        flush=True,
+                    )
+                    if prof is not None:
+                        compiled[name] = json.loads(prof.read_text())
             if a.warm_cache and src is not None:
                 cache = work / f"cache-warm-{i}"
                 cache.mkdir()
@@ -505,6 +599,19 @@ def main() -> None:
                 other = work / f"clone-{i}" / "src"
                 shutil.copytree(src, other, ignore=shutil.ignore_patterns("__pycache__"))
                 clone.append(_run(python, ["cache", "--warm"], _env(other, cache), work))
+                for name in names if a.after_warm == "all" else a.after_warm.split(","):
+                    if name not in first:
+                        continue
+                    copy = work / f"cache-aw-{name}-{i}"
+                    shutil.copytree(cache, copy)
+                    xdg = cache.parent / (cache.name + "-xdg")
+                    if xdg.exists():
+                        shutil.copytree(xdg, copy.parent / (copy.name + "-xdg"))
+                    after_warm.setdefault(name, []).append(
+                        _run(python, commands[name], _env(src, copy), work)
+                    )
+                    shutil.rmtree(copy, ignore_errors=True)
+                    print(f"{name} #{i} after cache --warm: {after_warm[name][-1][0]:.2f} s")
                 shutil.rmtree(cache, ignore_errors=True)
                 print(
                     f"#{i}: cache --warm {warming[-1][0]:.2f} s ({warming[-1][1]:.2f} CPU), "
@@ -536,6 +643,37 @@ def main() -> None:
         "|---|---:|---:|---:|---:|---:|---:|---:|",
         *rows,
     ]
+    if against is not None:
+        lines += [
+            "",
+            f"Interleaved with the tree before ({against}), each on its own empty cache:",
+            "",
+            "| command | first before (s) | first after (s) | after / before "
+            "| first CPU before | first CPU after | warm before (s) | warm after (s) "
+            "| first - warm before (s) | first - warm after (s) |",
+            "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        ]
+        for name in names:
+            fb, fa = med(before[name], 0), med(first[name], 0)
+            wb, wa = med(before_warm[name], 0), med(warm[name], 0)
+            lines.append(
+                f"| `{name}` | {fb:.2f} | {fa:.2f} | {fa / fb:.2f} | {med(before[name], 1):.2f} "
+                f"| {med(first[name], 1):.2f} | {wb:.2f} | {wa:.2f} | {fb - wb:.2f} "
+                f"| {fa - wa:.2f} |"
+            )
+    if after_warm:
+        lines += [
+            "",
+            "A first run on a cache that only `imageform cache --warm` filled (median):",
+            "",
+            "| command | after cache --warm (s) | first, empty cache (s) | warm (s) |",
+            "|---|---:|---:|---:|",
+        ]
+        for name, runs in after_warm.items():
+            lines.append(
+                f"| `{name}` | {med(runs, 0):.2f} | {med(first[name], 0):.2f} "
+                f"| {med(warm[name], 0):.2f} |"
+            )
     if warming:
         lines += [
             "",

@@ -300,6 +300,21 @@ def test_warm_runs_each_command_and_reports_failures(
     assert "no-such-command" in errors["no-such-command"]
 
 
+def test_warm_inputs_hold_every_jobs_input(tmp_path: Path) -> None:
+    """Each command of ``cache --warm`` reads files its inputs script wrote (numba off)."""
+    from imageform.cli import _cache
+
+    env = {**os.environ, "PYTHONPATH": str(SRC), "IMAGEFORM_DISABLE_NUMBA": "1"}
+    subprocess.run([sys.executable, "-c", _cache._INPUTS, str(tmp_path)], env=env, check=True)
+    jobs = _cache._jobs(tmp_path)
+    assert {j[0] for j in jobs} >= {"simulate", "calibrate", "depth", "track", "develop"}
+    for job in jobs:
+        outs = {job[i + 1] for i, a in enumerate(job) if a == "-o"}
+        for arg in job:
+            if arg.startswith(str(tmp_path)) and arg not in outs:
+                assert list(tmp_path.glob(arg[len(str(tmp_path)) + 1 :])), (job, arg)
+
+
 # ---- one cache per machine (issue 25): the same kernels, wherever they are, share it ----
 
 _SHARED_PROBE = r"""

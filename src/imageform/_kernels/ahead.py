@@ -112,6 +112,26 @@ _BOARD_CHILD = (
     ),
 )
 
+#: the ArUco detector's kernels (track with a ChArUco board or one marker): the threshold's
+#: components and the codes' reading in the second process, the quads here
+_MARKER_CHILD = (
+    Entry("aruco", "dark_components", f"({_A2}, {_A2}, int64, int64, float64, int64, int64)"),
+    Entry("aruco", "decode_cells", f"({_A2}, uint8[:, :, ::1], int64, int64, float64, float64)"),
+)
+_MARKER_HERE = (
+    Entry("aruco", "box_integral_roi", f"({_A2}, int64, int64, int64, int64, int64, {_A2})"),
+    Entry(
+        "aruco", "component_quads", f"(int64[:, ::1], {_I1}, {_I1}, {_I1}, int64[:, ::1], float64)"
+    ),
+    Entry("aruco", "cell_means", f"({_A2}, {_A3}, int64)"),
+)
+#: PnP's refinement of every frame's pose (track; reconstruct's plan has it too)
+_PNP_REFINE = Entry(
+    "pnp",
+    "_refine_tasks",
+    f"(int64, int64, {_A3}, {_A2}, {_A3}, {_A3}, {_A2}, {_A2}, int64, float64, {_A1})",
+)
+
 #: The plans, from ``benchmarks/compile_plan.py`` (its figures: benchmarks/results).
 PLANS: dict[str, Plan] = {
     "calibrate": Plan(child=_BOARD_CHILD, here=_BOARD_HERE),
@@ -125,6 +145,17 @@ PLANS: dict[str, Plan] = {
             Entry("chart", "block_mean_numba", f"({_A3}, int64, float64)"),
         ),
     ),
+    # track (16.7 s of CPU compiling cold, 2026-11-30): the marker detector, the corners'
+    # refinement and PnP, split in two halves; the plan is the board's kind's
+    "track-charuco": Plan(
+        child=_MARKER_CHILD + (_BOARD_CHILD[0],),
+        here=_MARKER_HERE
+        + (
+            Entry("aruco", "sample_quadrants", f"({_A2}, {_A3}, {_A2}, {_A3}, {_A2})"),
+            _PNP_REFINE,
+        ),
+    ),
+    "track-aruco": Plan(child=(*_MARKER_CHILD, _PNP_REFINE), here=(*_MARKER_HERE, _BOARD_CHILD[0])),
     # the full line-segment detector (lsd_full.lsd, 5.9 s) split at its callees
     "vanishing": Plan(
         child=(
@@ -179,22 +210,51 @@ PLANS: dict[str, Plan] = {
             ),
         ),
     ),
-    # rendering and optics (3 s of NumPy) overlap the demosaicing and line-segment kernels
+    # rendering and optics (3 s of NumPy) overlap the undistortion, demosaicing and the full
+    # line-segment detector's sampling and gradients in the second process; the detector's
+    # core and the small rendering kernels compile here (2026-11-30: the plan of 11-29 named
+    # lsd's kernels, which simulate no longer calls: 16.6 s of CPU compiling cold)
     "simulate": Plan(
         child=(
+            Entry(
+                "remap",
+                "_undistort_tasks",
+                "(int64, int64, float64[:, :, :, ::1], float64[::1], boolean, float64, float64,"
+                " float64[:, :, :, ::1], float64[::1], int32[::1], float64, int64)",
+            ),
             Entry(
                 "demosaic_menon",
                 "_menon_tasks",
                 f"(int64, int64, {_A2}, int64, int64, int64, int64, boolean, boolean, int64,"
                 f" {_A3})",
             ),
+            Entry("lsd_full", "gaussian_sampler", f"({_A2}, float64, float64)"),
+            Entry("lsd_full", "ll_angle", f"({_A2}, float64, int64)"),
+        ),
+        here=(
             Entry(
-                "lsd",
-                "grow_regions",
-                f"({_A2}, {_I1}, float64, int64)",
+                "lsd_full",
+                "_detect",
+                f"({_A2}, {_A2}, int32[::1], int32[::1], float64, float64, float64, float64,"
+                " float64, boolean)",
             ),
-            Entry("lsd", "region_rectangles", f"(int32[:, ::1], int64, {_A2})"),
-            Entry("lsd", "rect_alignment_counts", f"({_A2}, {_A2}, float64)"),
+            Entry(
+                "distortion",
+                "_bc_undistort",
+                f"(int64, int64, {_A2}, {_A1}, int64, float64, {_A2}, boolean[::1])",
+            ),
+            Entry(
+                "raycast",
+                "_raycast_kernel",
+                f"(int64, int64, {_A2}, {_A2}, {_A2}, {_A2}, {_A2}, int32[::1], {_A1}, {_A1},"
+                f" {_A1})",
+            ),
+            Entry(
+                "remap",
+                "_remap_grey_tasks",
+                f"(int64, int64, {_A2}, {_A1}, int64, int64, int64, int64, float64, float64,"
+                f" {_A2}, {_A1}, float64, int64)",
+            ),
         ),
     ),
     # the essential matrix's estimator (13.4 s of 17.1) split at its callees: the 5-point

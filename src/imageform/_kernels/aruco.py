@@ -1173,6 +1173,19 @@ def sample_quadrants(
 
 
 @njit(nogil=True, error_model="numpy")
+def _sort_small(v: NDArray[np.float64]) -> None:  # pragma: no cover - compiled
+    # insertion sort in place, NaN last (NumPy's order): the same values as ``v.sort()`` for
+    # a quad's 36-81 cell means, without numba's quicksort (1.4 s of a first run's compiling)
+    for i in range(1, v.size):
+        x = v[i]
+        j = i - 1
+        while j >= 0 and (v[j] > x or (v[j] != v[j] and x == x)):
+            v[j + 1] = v[j]
+            j -= 1
+        v[j + 1] = x
+
+
+@njit(nogil=True, error_model="numpy")
 def decode_cells(
     means: NDArray[np.float64],
     rotated: NDArray[np.uint8],
@@ -1209,7 +1222,7 @@ def decode_cells(
             lo = min(lo, row[t])
             hi = max(hi, row[t])
         contrast[q] = hi - lo
-        v.sort()
+        _sort_small(v)
         acc = 0.0
         for t in range(n):
             acc += v[t]

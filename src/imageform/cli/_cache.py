@@ -5,7 +5,8 @@ or ``simulate``) and caches them on disk (``imageform._kernels.jit``: the policy
 location). ``imageform cache --warm`` pays that once, ahead of time: after installing, in a
 container image, or before a CI test run. It runs the commands people wait on (``simulate`` with its
 built-in scene, ``pose --ransac`` with a Brown-Conrady camera, ``demosaic`` with each method,
-``convert``, ``calibrate`` on three checkerboard views, ``undistort``) on small inputs it writes to
+``convert``, ``calibrate`` on three checkerboard views, ``undistort``, ``depth``, ``track`` with a
+ChArUco board and with one ArUco marker, ``vanishing``, ``develop``) on small inputs it writes to
 a temporary folder, each in its own process (``--jobs`` at once), so that every kernel they use is
 compiled for the same types and layouts as a real run, and written to the cache.
 """
@@ -69,11 +70,27 @@ write_stereo_camera(work / "rig.toml", StereoCameraFile(
 tex = (np.random.default_rng(7).uniform(0, 1, (120, 160)) * 255).astype(np.uint8)
 write_image(work / "pair_r.png", tex[..., None])
 write_image(work / "pair_l.png", np.roll(tex, 10, axis=1)[..., None])
+# track: two frames of a 7 x 5 ChArUco board (5x5_100), two of one ArUco marker (4x4_50, id 7)
+from imageform.geometry import CharucoBoard, aruco_marker_image
+chart = CharucoBoard((7, 5), 30.0, 22.0, "5x5_100").image(50, margin_px=20)
+marker = np.pad(aruco_marker_image(7, "4x4_50", size_px=120), 40, constant_values=255)
+for name, face in (("charuco", chart), ("marker", marker)):
+    (work / name).mkdir()
+    for k in range(2):
+        frame = np.full((480, 640), 110, np.uint8)
+        y, x = 60 + 8 * k, 90 + 12 * k
+        frame[y : y + face.shape[0], x : x + face.shape[1]] = face
+        write_image(work / name / f"frame{k}.png", np.repeat(frame[..., None], 3, axis=2))
+# develop: a small DNG (the raw pipeline's kernels)
+from imageform.io import write_dng
+raw = (rng.uniform(0.05, 0.8, (64, 96)) * 4095).astype(np.uint16)
+write_dng(work / "raw.dng", raw, white_level=4095, color_matrix=np.eye(3))
 """
 
 
 def _jobs(work: Path) -> list[list[str]]:
     w = str(work)
+    board = ["--camera", f"{w}/cam.toml", "--board"]
     jobs = [
         ["simulate", "-o", f"{w}/sim"],
         ["pose", f"{w}/cam.toml", f"{w}/pairs.csv", "--ransac"],
@@ -93,6 +110,35 @@ def _jobs(work: Path) -> list[list[str]]:
             "-o",
             f"{w}/z.tif",
         ],
+        [
+            "track",
+            f"{w}/charuco",
+            *board,
+            "charuco:7x5",
+            "--square",
+            "30mm",
+            "--marker",
+            "22mm",
+            "--dictionary",
+            "5x5_100",
+            "-o",
+            f"{w}/charuco.csv",
+        ],
+        [
+            "track",
+            f"{w}/marker",
+            *board,
+            "aruco:7",
+            "--marker",
+            "40mm",
+            "--dictionary",
+            "4x4_50",
+            "-o",
+            f"{w}/marker.csv",
+        ],
+        # the full line-segment detector (vanishing and horizon; simulate's analysis uses it too)
+        ["vanishing", f"{w}/board_rgb.png", "-o", f"{w}/vp.png"],
+        ["develop", f"{w}/raw.dng", "-o", f"{w}/dev.png"],
     ]
     # 8-bit mosaics only: 16-bit ones run the same float32 kernels
     for method in ("menon", "bilinear", "malvar", "hamilton-adams"):

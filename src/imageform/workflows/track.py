@@ -332,6 +332,9 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
             f"camera file {opts.camera} is for {cam.image_size[0]} x {cam.image_size[1]} px "
             f"images, {video} has {info.width} x {info.height} px frames"
         )
+    from imageform._kernels import ahead
+
+    ahead.start(f"track-{kind}")  # a first run: the detector's kernels compiled on two cores
     live = info.kind == "device"
     writer = None
     rows: list[list[str]] = []
