@@ -65,6 +65,8 @@ def test_rolloff_keeps_the_shadows_and_clips_nothing_the_sensor_did_not(bright_d
     dark = develop(raw, highlight_rolloff=True)
     assert not dark.highlight_rolloff
     np.testing.assert_array_equal(dark.image, develop(raw).image)
+    assert any("roll-off changes nothing" in n for n in dark.notes)  # said, not silent
+    assert not any("roll-off" in n for n in roll.notes)
 
 
 def test_cli_highlight_rolloff(bright_dng: Path, tmp_path: Path) -> None:

@@ -1837,6 +1837,12 @@ def develop(
         dev.highlight_rolloff = True
         dev._render = m
         dev._table = _transfer_table(encoding, dev.brightness)
+    elif highlight_rolloff:  # asked for, but nothing brightened to roll off
+        dev.notes = (
+            *dev.notes,
+            "highlight roll-off changes nothing here: nothing was brightened (it acts with "
+            "baseline_exposure on a positive BaselineExposure, or with auto_bright)",
+        )
     return dev
 
 
