@@ -690,3 +690,19 @@ def test_a_multi_frame_dicom_file_is_a_video(tmp_path: Path) -> None:
     for w, have in zip(want, frames, strict=True):
         assert have.shape == (6, 8, 3)
         np.testing.assert_array_equal(have[..., 0], w)
+
+
+def test_is_dicom_file_reads_regular_files_only(tmp_path: Path) -> None:
+    """One test of ``DICM`` at byte 128 serves the readers, video and chunked commands: any
+    suffix; a folder or a FIFO is never opened (a FIFO would block); a short file is not."""
+    import os
+
+    from imageform.io.image_io import is_dicom_file
+
+    (tmp_path / "scan.bin").write_bytes(b"\0" * 128 + b"DICM" + b"\0" * 8)
+    (tmp_path / "short.dcm").write_bytes(b"\0" * 130)
+    os.mkfifo(tmp_path / "pipe.dcm")
+    assert is_dicom_file(tmp_path / "scan.bin") and is_dicom_file(str(tmp_path / "scan.bin"))
+    assert not is_dicom_file(tmp_path / "short.dcm")
+    assert not is_dicom_file(tmp_path / "pipe.dcm") and not is_dicom_file(tmp_path)
+    assert not is_dicom_file(tmp_path / "missing.dcm")

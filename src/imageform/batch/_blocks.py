@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from imageform._validate import check_option
-from imageform.batch._lazy import _is_dicom, _TiffMeta
+from imageform.batch._lazy import _TiffMeta
 from imageform.errors import InvalidInputError, UnreadableFileError
 from imageform.workflows.color import CHUNKED_CHOICES
 
@@ -145,7 +145,9 @@ def _stain_stats(
         h, w = levels[k]
         step = max(1, int(np.ceil(np.sqrt(h * w / budget))))
         try:
-            if _is_dicom(src):  # a DICOM slide's level is a file of its series
+            from imageform.io.image_io import is_dicom_file
+
+            if is_dicom_file(src):  # a DICOM slide's level is a file of its series
                 from imageform.io import dicom
 
                 found = [f for f, fw, fh in dicom.slide_levels(src) if (fh, fw) == (h, w)]

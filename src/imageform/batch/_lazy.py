@@ -24,15 +24,6 @@ if TYPE_CHECKING:
 __all__ = ["open_lazy"]
 
 
-def _is_dicom(path: Path) -> bool:
-    """Whether ``path`` is a file with DICOM's ``DICM`` at byte 128 (any suffix)."""
-    try:
-        with path.open("rb") as fh:
-            return fh.read(132)[128:132] == b"DICM"
-    except OSError:
-        return False
-
-
 def _kind(path: Path, output: bool = False) -> str:
     """Return "tiff", "zarr" or "dicom" for ``path``.
 
@@ -40,9 +31,10 @@ def _kind(path: Path, output: bool = False) -> str:
     tiles of one matrix).
     """
     from imageform.io import IMAGE_FORMATS
+    from imageform.io.image_io import is_dicom_file
 
     suffix = path.suffix.lower()
-    if not output and path.is_file() and _is_dicom(path):
+    if not output and is_dicom_file(path):
         return "dicom"
     if suffix in (".tif", ".tiff") or (not output and IMAGE_FORMATS.get(suffix) == "tiff"):
         return "tiff"

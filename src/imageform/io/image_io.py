@@ -1009,6 +1009,21 @@ def _dicom_head(head: bytes) -> bool:
     return len(head) >= 132 and head[128:132] == b"DICM"
 
 
+def is_dicom_file(path: str | Path) -> bool:
+    """Whether ``path`` is a regular file with ``DICM`` at byte 128 (any suffix).
+
+    Not a regular file (a folder, a FIFO: never opened) or unreadable: False.
+    """
+    p = Path(path)
+    try:
+        if not p.is_file():
+            return False
+        with p.open("rb") as fh:
+            return _dicom_head(fh.read(132))
+    except OSError:
+        return False
+
+
 def _pixels(n: int) -> str:
     """Format a pixel count: ``"768 px"`` below 0.1 Mpx, else 3 digits (``"0.123 Mpx"``)."""
     if n < 100_000:

@@ -36,7 +36,7 @@ from imageform._files import git_lfs_pointer
 from imageform._typing import ArrayLike
 from imageform._validate import describe
 from imageform.errors import InvalidInputError, UnreadableFileError
-from imageform.io.image_io import IMAGE_FORMATS, _natural_key, image_files
+from imageform.io.image_io import IMAGE_FORMATS, _natural_key, image_files, is_dicom_file
 from imageform.io.interlace import Interlacing
 
 __all__ = [
@@ -147,17 +147,6 @@ def _sequence_files(source: str) -> list[Path] | None:
             raise InvalidInputError(f"no image matches {describe(source)}")
         return sorted(files, key=lambda f: (_natural_key(f.name), str(f)))
     return None
-
-
-def _is_dicom(path: Path) -> bool:
-    """Whether ``path`` is a regular file with ``DICM`` at byte 128 (a DICOM file)."""
-    from imageform.io.image_io import _dicom_head
-
-    try:
-        with open(path, "rb") as fh:
-            return path.is_file() and _dicom_head(fh.read(132))
-    except OSError:
-        return False
 
 
 def _is_device(source: str) -> bool:
@@ -291,7 +280,7 @@ class VideoReader:
             )  # fmt: skip
             return
         self._dicom: Path | None = None
-        if not _is_device(self._source) and _is_dicom(Path(self._source)):
+        if not _is_device(self._source) and is_dicom_file(self._source):
             self._open_dicom(Path(self._source), fps)
             return
         av = _av()

@@ -1103,11 +1103,9 @@ def _is_dicom(image: Path) -> bool:
 
     A ``.dcm`` file without it goes through :func:`image_info`, which reads what it holds.
     """
-    try:
-        with Path(image).open("rb") as fh:
-            return fh.read(132)[128:132] == b"DICM"
-    except OSError:
-        return False
+    from imageform.io.image_io import is_dicom_file
+
+    return is_dicom_file(image)
 
 
 def _dicom_info(image: Path) -> Result:
