@@ -568,13 +568,12 @@ def check_index(frame: object) -> int:
 
 def check_frame(p: Path, info: DicomInfo, frame: object) -> int:
     """Return ``frame`` as an index into the file's frames, or refuse it in one line."""
-    if isinstance(frame, bool) or not isinstance(frame, (int, np.integer)):
-        raise InvalidInputError(f"expected frame as an integer, got {describe(frame)}")
-    if not 0 <= int(frame) < info.frames:
+    k = check_index(frame)
+    if not 0 <= k < info.frames:
         raise InvalidInputError(
-            f"{p} has {info.frames} frame(s) (0 to {info.frames - 1}), no frame {int(frame)}"
+            f"{p} has {info.frames} frame(s) (0 to {info.frames - 1}), no frame {k}"
         )
-    return int(frame)
+    return k
 
 
 def multi_frame(p: Path, info: DicomInfo) -> InvalidInputError:
