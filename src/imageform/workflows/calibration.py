@@ -990,7 +990,7 @@ def undistort(run: Run, opts: UndistortOptions, *, out: Path, image: Path) -> Re
 WORKFLOWS = (
     Workflow(
         "calibrate",
-        "Calibrate a camera from checkerboard views: writes the camera file.",
+        "Calibrate a camera from checkerboard or ChArUco views: writes the camera file.",
         "imageform.workflows.calibration:calibrate",
         CalibrateOptions,
         (
