@@ -64,6 +64,7 @@ __all__ = [
     "check_image_size",
     "check_magnitude",
     "check_memory",
+    "check_min_side",
     "check_name",
     "check_nonempty",
     "check_nonzero_rows",
@@ -623,6 +624,26 @@ def check_image_size(size: object, name: str = "image_size") -> tuple[int, int]:
     """
     w, h = as_size(size, f"{name} (width, height)", maximum=MAX_SIDE)
     return w, h
+
+
+def check_min_side(shape: Sequence[int], side: int, name: str = "image") -> None:
+    """Refuse an image whose height or width is under ``side`` pixels, in one spelling.
+
+    ``shape`` is the array's shape, rows first; the message gives width x height.
+
+    Examples
+    --------
+    >>> check_min_side((8, 40), 16)
+    Traceback (most recent call last):
+    ...
+    imageform.errors.InvalidInputError: expected an image of at least 16 x 16 pixels, got 40 x 8
+    """
+    h, w = int(shape[0]), int(shape[1]) if len(shape) > 1 else 1
+    if min(h, w) < side:
+        article = "an " if name == "image" else ""
+        raise InvalidInputError(
+            f"expected {article}{name} of at least {side} x {side} pixels, got {w} x {h}"
+        )
 
 
 def check_nonempty(image: Any, name: str = "image") -> Any:

@@ -312,7 +312,7 @@ def test_methods_and_bad_inputs() -> None:
         lsd_segments(img, angle_tolerance=2.0)
     with pytest.raises(InvalidInputError, match="n_bins"):
         lsd_segments(img, n_bins=0)
-    with pytest.raises(InvalidInputError, match="3x3"):
+    with pytest.raises(InvalidInputError, match="3 x 3"):
         lsd_segments(np.zeros((2, 9)))
     with pytest.raises(InvalidInputError, match="validate"):
         lsd_segments(img, validate=1)  # type: ignore[arg-type]

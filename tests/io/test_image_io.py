@@ -473,7 +473,7 @@ def test_interlaced_png_is_read_without_libpng_on_stderr(tmp_path: Path) -> None
     )
     assert done.returncode == 1
     assert done.stderr.strip().splitlines() == [
-        "imageform: error: expected an image of at least 3x3 pixels, got (1, 1)"
+        "imageform: error: expected an image of at least 3 x 3 pixels, got 1 x 1"
     ]
 
 

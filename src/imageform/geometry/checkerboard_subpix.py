@@ -20,6 +20,7 @@ from imageform._validate import (
     as_points_bounded,
     as_real,
     check_bounded,
+    check_min_side,
     format_shape,
     size_pair,
 )
@@ -74,10 +75,7 @@ def as_gray(image: ArrayLike) -> NDArray[np.floating]:
         )
     # values beyond 1e30 overflow float32 and the squared gradients: no image holds them
     check_bounded(arr, "image", np, limit=1e30)
-    if min(arr.shape) < 16:
-        raise InvalidInputError(
-            f"expected an image of at least 16 x 16 pixels, got {format_shape(arr.shape)}"
-        )
+    check_min_side(arr.shape, 16)
     return arr
 
 

@@ -70,7 +70,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from imageform._typing import ArrayLike, FloatArray
-from imageform._validate import as_image, as_real
+from imageform._validate import as_image, as_real, check_min_side
 from imageform.errors import InvalidInputError
 
 __all__ = ["HorizonResult", "detect_horizon"]
@@ -187,8 +187,7 @@ def _prepare(image: ArrayLike) -> tuple[np.ndarray, float]:
             f"expected an (H, W) or (H, W, 3) image, got shape {tuple(arr.shape)}"
         )
     h, w = arr.shape[:2]
-    if min(h, w) < 16:
-        raise InvalidInputError(f"expected an image at least 16 x 16 px, got {w} x {h} px")
+    check_min_side(arr.shape, 16)
     scale = min(1.0, _WORK / max(h, w))
     a = arr.astype(np.float64)
     if scale < 1.0:

@@ -40,6 +40,7 @@ from imageform._validate import (
     as_float_bounded,
     as_image,
     as_real,
+    check_min_side,
     check_positive,
     describe,
     shape_text,
@@ -224,8 +225,7 @@ def detect_line_segments(
     if method == "lsd":
         return _detect_lsd(image, sigma, angle_tolerance, min_length, log10_eps, min_density)
     img = _grey(image)
-    if min(img.shape) < 3:
-        raise InvalidInputError(f"expected an image of at least 3x3 pixels, got {img.shape}")
+    check_min_side(img.shape, 3)
     if sigma > 0:
         img = ndimage.gaussian_filter(img, sigma, mode="nearest")
     ang, mag = _gradient(img)

@@ -40,7 +40,7 @@ import math
 import numpy as np
 
 from imageform._typing import ArrayLike, FloatArray
-from imageform._validate import as_bool, as_int, as_real, check_positive
+from imageform._validate import as_bool, as_int, as_real, check_min_side, check_positive
 from imageform.errors import InvalidInputError
 from imageform.geometry._plumb_edges import grey
 
@@ -127,8 +127,7 @@ def lsd_segments(
     min_length = check_positive(min_length, "min_length", allow_zero=True)
     log10_eps = as_real(log10_eps, "log10_eps")
     img = _grey255(image)
-    if min(img.shape) < 3:
-        raise InvalidInputError(f"expected an image of at least 3x3 pixels, got {img.shape}")
+    check_min_side(img.shape, 3)
     if not np.isfinite(img).all():
         raise InvalidInputError("expected a finite image, got NaN or infinite values")
     out = lsd(

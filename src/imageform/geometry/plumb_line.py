@@ -59,7 +59,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from imageform._typing import ArrayLike, FloatArray
-from imageform._validate import as_bool, as_int, as_real, describe
+from imageform._validate import as_bool, as_int, as_real, check_min_side, describe
 from imageform.errors import (
     DegenerateConfigurationError,
     IllConditionedWarning,
@@ -502,8 +502,7 @@ def estimate_distortion_from_lines(
     """
     img = _grey(image)
     h, w = img.shape
-    if min(h, w) < 16:
-        raise InvalidInputError(f"expected an image of at least 16 x 16 pixels, got {w} x {h}")
+    check_min_side(img.shape, 16)
     estimate_center = as_bool(estimate_center, "estimate_center")
     pair = np.asarray(k_range, dtype=object)
     if pair.shape != (2,):
