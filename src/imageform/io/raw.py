@@ -997,7 +997,7 @@ def _read_vc5(p: Path, page: Any, fh: Any) -> np.ndarray:
         return decoded_tiles(page, fh)
     except Vc5Error as exc:
         raise UnreadableFileError(
-            p, f"its VC-5 raw image (a GoPro GPR) is corrupt: {exc}"
+            p, f"its raw image, GoPro's VC-5 (a GPR file, Compression 9), is corrupt: {exc}"
         ) from None
 
 
