@@ -244,7 +244,7 @@ def decode(data: bytes, *, rggb: bool = True) -> np.ndarray:
         if at >= n:
             raise Vc5Error(
                 f"the bitstream ends before the last subband (at subband {subband} of channel "
-                f"{channel}: the tile is truncated)"
+                f"{channel}): the tile is truncated or corrupt"
             )
         word = int(words[at])
         at += 1
