@@ -74,17 +74,22 @@ def _peek32(buf: np.ndarray, pos: int) -> int:
 @njit(inline="always")
 def _codeword(
     buf: np.ndarray, pos: int, fast: np.ndarray, slow: np.ndarray
-) -> tuple[int, int, int]:
-    """Return (size, run, magnitude) of the codeword at bit ``pos``; size 0: none."""
+) -> tuple[int, int, int, int]:
+    """Return (size, run, magnitude, sign) of the codeword at bit ``pos``; size 0: none.
+
+    ``sign`` is the bit after the codeword (the sign of a magnitude; codewords have at most
+    26 bits, so it is among the 32 read).
+    """
     bits = _peek32(buf, pos)
     i = bits >> (32 - FAST_BITS)
-    if fast[i, 0] > 0:
-        return fast[i, 0], fast[i, 1], fast[i, 2]
+    size = fast[i, 0]
+    if size > 0:
+        return size, fast[i, 1], fast[i, 2], (bits >> (31 - size)) & 1
     for k in range(slow.shape[0]):
         size = slow[k, 0]
         if (bits >> (32 - size)) == slow[k, 1]:
-            return size, slow[k, 2], slow[k, 3]
-    return 0, 0, 0
+            return size, slow[k, 2], slow[k, 3], (bits >> (31 - size)) & 1
+    return 0, 0, 0, 0
 
 
 @njit(nogil=True, error_model="numpy")
@@ -101,12 +106,12 @@ def band_runs(
     total = flat.size
     index = 0
     while index < total:
-        size, run, value = _codeword(buf, pos, fast, slow)
+        size, run, value, sign = _codeword(buf, pos, fast, slow)
         if size == 0:
             return ERR_NO_CODEWORD if pos + 26 <= nbits else ERR_TRUNCATED
         pos += size
         if value != 0:
-            if (_peek32(buf, pos) >> 31) == 1:
+            if sign == 1:
                 value = -value
             pos += 1
         if pos > nbits:
@@ -116,7 +121,7 @@ def band_runs(
         for _ in range(run):
             flat[index] = value
             index += 1
-    size, run, value = _codeword(buf, pos, fast, slow)
+    size, run, value, _ = _codeword(buf, pos, fast, slow)
     if size == 0:
         return ERR_NO_CODEWORD if pos + 26 <= nbits else ERR_TRUNCATED
     pos += size
