@@ -26,9 +26,10 @@ For each file:
 - the CFA: imageform's (``imageform.io._vc5.decoded_tiles``) against the reference's, sample
   for sample (maximum difference and how many differ); ``read_raw`` of the GPR against
   ``read_raw`` of the reference DNG (LibRaw reads that one);
-- decode time, the VC-5 tile to the Bayer mosaic: imageform (tile read + decode, medians of
-  ``--repeat`` after one warm-up) against the reference decoder's ``vc5_decoder_process`` in a
-  small C program linked with the build's libraries (the same tile, medians in one process);
+- decode time, the VC-5 tile to the Bayer mosaic: imageform (tile read + decode, after one
+  warm-up) against the reference decoder's ``vc5_decoder_process`` in a small C program linked
+  with the build's libraries (the same tile in memory, its second decode in the process),
+  interleaved, medians of ``--repeat``;
 - ``imageform develop`` on the GPR in a subprocess (exit status, what it wrote), and the
   development (bilinear, camera white balance, sRGB) of the GPR against the development of the
   reference DNG: mean and maximum CIEDE2000, 2-pixel border left out; the developed image's
@@ -154,16 +155,16 @@ def _check(path: Path, exe: Path, tools: Path, work: Path, repeat: int, before: 
             _vc5.decoded_tiles(page, fh)
 
         decode()
-        times = []
-        for _ in range(repeat):
+        times, c_times = [], []
+        for _ in range(repeat):  # interleaved: ours, then the reference (its second decode)
             t0 = time.perf_counter()
             decode()
             times.append(time.perf_counter() - t0)
-    ours_s = statistics.median(times)
+            cp = subprocess.run([str(exe), str(tile), "2"], capture_output=True, text=True)
+            c_times.append(float(cp.stdout.split()[1]))
+    ours_s, c_s = statistics.median(times), statistics.median(c_times)
     ref = np.fromfile(ref_raw, "<u2").reshape(ours.shape)
     diff = np.abs(ours.astype(np.int64) - ref)
-    cp = subprocess.run([str(exe), str(tile), str(repeat + 1)], capture_output=True, text=True)
-    c_s = statistics.median(float(v) for v in cp.stdout.split()[1:])
     a, b = read_raw(path), read_raw(ref_dng)
     same_read = np.array_equal(a.mosaic, b.mosaic)
     da, db = develop(a).image, develop(b).image
