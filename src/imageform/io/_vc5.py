@@ -261,17 +261,17 @@ def decode(data: bytes, *, rggb: bool = True) -> np.ndarray:
             is_header = True
             if not optional and (header_done or tag in header):  # optional: just updated
                 raise Vc5Error(f"a misplaced or repeated header parameter {_HEADER_TAGS[tag]}")
-            header[tag] = svalue
+            header[tag] = value  # unsigned, as the reference's DIMENSION and counts
         elif tag == 48:
-            subband = svalue
+            subband = value
         elif tag == 53:
-            quant = svalue
+            quant = value
         elif tag == 35:
             if not 8 <= svalue <= 32:
                 raise Vc5Error(f"a lowpass precision of {svalue} bits (VC-5 allows 8 to 32)")
             precision = svalue
         elif tag == 62:
-            channel = svalue
+            channel = value
         elif tag == 101:
             pass  # BitsPerComponent: the output's depth does not depend on it
         elif tag == 109:
