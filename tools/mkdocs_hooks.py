@@ -96,6 +96,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "sass-demosaic": "benchmarks/sass_demosaic.py",
     "illuminant-fresh": "benchmarks/check_illuminant_fresh.py",
     "illuminant-real": "benchmarks/check_illuminant_real.py",
+    "gpr": "benchmarks/check_gpr.py",
     "horizon-natural": "benchmarks/check_horizon_natural.py",
     "local-homography": "benchmarks/check_local_homography.py",
     "lsd": "benchmarks/bench_lsd.py",

@@ -942,8 +942,9 @@ def test_white_level_below_most_samples(base: tuple[Path, list[tuple], np.ndarra
 def test_gpr_vc5_refused_naming_the_compression(
     base: tuple[Path, list[tuple], np.ndarray], tmp_path: Path
 ) -> None:
-    """A GoPro GPR (a DNG compressed with VC-5, Compression 9, which rawpy's LibRaw is built
-    without) is refused in one line naming the compression, not as 'not a raw file'."""
+    """A DNG that says Compression 9 (GoPro's VC-5, which rawpy's LibRaw is built without and
+    imageform decodes: tests/io/test_vc5.py) but whose tile is no VC-5 bitstream is refused in
+    one line naming the compression and what is wrong, not as 'not a raw file'."""
     import tifffile
 
     data = bytearray(base[0].read_bytes())
@@ -952,6 +953,6 @@ def test_gpr_vc5_refused_naming_the_compression(
     data[entry + 8 : entry + 10] = (9).to_bytes(2, "little")
     gpr = tmp_path / "hero.gpr"
     gpr.write_bytes(bytes(data))
-    with pytest.raises(UnreadableFileError, match=r"VC-5.*Compression 9") as err:
+    with pytest.raises(UnreadableFileError, match=r"VC-5.*Compression 9.*start marker") as err:
         read_raw(gpr)
     assert "\n" not in str(err.value)

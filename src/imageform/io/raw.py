@@ -982,6 +982,23 @@ def _dng_raw_page(tf: Any) -> Any:
 #: Compressions of DNG raw images that neither LibRaw (as rawpy builds it) nor tifffile may
 #: decode, named in the refusal.
 _DNG_COMPRESSIONS = {9: "GoPro's VC-5 (a GPR file)", 52546: "JPEG XL"}
+#: Compression of a GoPro GPR's raw image (VC-5, SMPTE ST 2073): :mod:`imageform.io._vc5`.
+_COMPRESSION_VC5 = 9
+
+
+def _read_vc5(p: Path, page: Any, fh: Any) -> np.ndarray:
+    """Return the raw image of a GPR's DNG page, decoded by :mod:`imageform.io._vc5`.
+
+    A bitstream that cannot be decoded is refused in one line (:class:`UnreadableFileError`).
+    """
+    from imageform.io._vc5 import Vc5Error, decoded_tiles
+
+    try:
+        return decoded_tiles(page, fh)
+    except Vc5Error as exc:
+        raise UnreadableFileError(
+            p, f"its raw image, GoPro's VC-5 (a GPR file, Compression 9), is corrupt: {exc}"
+        ) from None
 
 
 def _dng_compression(p: Path) -> int | None:
@@ -1039,7 +1056,8 @@ def _read_dng(p: Path, limit: int) -> RawImage | None:
             colour = _colour_tags(ifd0)
             info = ImageInfo(int(tags[256]), int(tags[257]), 1, "", "raw")
             _check_pixels(p, info, limit)
-            data = np.asarray(page.asarray())
+            vc5 = int(tags.get(259, 1)) == _COMPRESSION_VC5
+            data = _read_vc5(p, page, tf.filehandle) if vc5 else np.asarray(page.asarray())
             flip = _EXIF_TO_FLIP.get(int(ifd0.valueof(274, 1)), 0)
             lossy = int(tags.get(259, 1)) == _COMPRESSION_LOSSY_JPEG and data.dtype == np.uint8
             list2 = _tag_bytes(objects[_OPCODE_LIST_2].value) if _OPCODE_LIST_2 in objects else None
@@ -1141,7 +1159,7 @@ def _read_dng(p: Path, limit: int) -> RawImage | None:
         "color_desc": "RGBG",
         "daylight_white_balance": None,
         "camera_model": str(model).strip("\x00") if model is not None else None,
-        "reader": "tifffile",
+        "reader": "imageform VC-5" if vc5 else "tifffile",
     }
     _baseline_ev(colour, meta)
     gains = None
