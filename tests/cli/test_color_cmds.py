@@ -321,3 +321,21 @@ def test_info_of_older_raw_suffixes(
     assert main(["info", str(junk)]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "not a raw file LibRaw can read" in err, err
+
+
+@pytest.mark.parametrize("name", ["photo.png", "photo.jpg", "photo.cr2"])
+def test_develop_names_an_ordinary_image(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`develop` of a PNG (under any suffix) says it is a developed image, in one line, and
+    writes nothing: it said "not a raw file LibRaw can read (LibRawFileUnsupportedError)"."""
+    pytest.importorskip("rawpy")
+    from PIL import Image
+
+    src = tmp_path / name
+    Image.fromarray(np.zeros((8, 8, 3), np.uint8)).save(src, format="PNG")
+    out = tmp_path / "out.png"
+    assert main(["develop", str(src), "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "it is a PNG image, not a camera raw file" in err, err
+    assert not out.exists()

@@ -729,7 +729,7 @@ def _read_raw(
                 f"neither LibRaw as rawpy builds it nor tifffile decodes ({type(exc).__name__})",
             ) from None
         raise UnreadableFileError(
-            p, f"not a raw file LibRaw can read ({type(exc).__name__})"
+            p, _not_raw(p) or f"not a raw file LibRaw can read ({type(exc).__name__})"
         ) from None
     with r:
         desc = r.color_desc.decode("ascii", "replace")
@@ -1862,6 +1862,29 @@ def develop(
             "baseline_exposure on a positive BaselineExposure, or with auto_bright)",
         )
     return dev
+
+
+def _not_raw(p: Path) -> str | None:
+    """Name the ordinary image LibRaw was given (``develop photo.png``), else ``None``.
+
+    Named by its first bytes (whatever its suffix), not a TIFF (several cameras' raw files
+    are TIFFs): a photograph is not developed.
+    """
+    from imageform.io.image_io import _content_format
+
+    try:
+        fmt = _content_format(p, "")  # "" when no image format's signature is there
+    except UnreadableFileError:  # an image format imageform does not read either
+        return None
+    if fmt in ("", "tiff", "npy"):
+        return None
+    name = {"jpeg": "JPEG", "netpbm": "Netpbm", "dicom": "DICOM", "heif": "HEIF"}.get(
+        fmt, fmt.upper()
+    )
+    return (
+        f"it is a {name} image, not a camera raw file (a DNG, CR2, NEF, ARW, RAF, ... as the "
+        "camera wrote it): it has been developed already (imageform convert reads it)"
+    )
 
 
 def _auto_bright(camera_rgb: np.ndarray, render: np.ndarray) -> float:
