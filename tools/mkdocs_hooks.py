@@ -155,6 +155,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "stereo-slant": "benchmarks/check_stereo_slant.py",
     "stereo-recess": "benchmarks/check_stereo_recess.py",
     "stereo-planes": "benchmarks/check_stereo_planes.py",
+    "stereo-sgmp": "benchmarks/check_stereo_sgmp.py",
     "track": "benchmarks/bench_track.py",
     "twin-loop": "benchmarks/check_twin_loop.py",
     "twoview": "benchmarks/bench_twoview.py",

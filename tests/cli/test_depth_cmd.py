@@ -188,6 +188,21 @@ def test_depth_plane_fill_option(files: tuple[Path, StereoScene], tmp_path: Path
     assert main([*base, "--plane-fill=3", "-o", str(tmp_path / "x.npy")]) == 2
 
 
+def test_depth_slant_prior_option(files: tuple[Path, StereoScene], tmp_path: Path) -> None:
+    """--slant-prior reaches stereo_disparity (off by default): a different map on the
+    rendered pair's slanted plane; it takes no value (exit 2)."""
+    d, _ = files
+    base = ["depth", str(d / "left.png"), str(d / "right.png"), "--camera", str(d / "rig.toml")]
+    base += ["--num-disparities", "48", "--disparity"]
+    maps = []
+    for extra in ([], ["--slant-prior"]):
+        out = tmp_path / f"s{len(maps)}.npy"
+        assert main([*base, *extra, "-o", str(out)]) == 0
+        maps.append(np.load(out))
+    assert not np.array_equal(maps[0], maps[1], equal_nan=True)
+    assert main([*base, "--slant-prior=3", "-o", str(tmp_path / "x.npy")]) == 2
+
+
 def test_depth_cost_window_option(
     files: tuple[Path, StereoScene], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

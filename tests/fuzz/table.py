@@ -1278,6 +1278,7 @@ VALID.update(
             block_size=3,
             census_threshold=1.0,
             cost_window=5,
+            slant_prior=True,
         ),
         "imageform.geometry.disparity_to_depth": call(
             np.array([[8.0, 4.0, 2.0], [1.0, 16.0, 8.0]]),

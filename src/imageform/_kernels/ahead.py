@@ -190,7 +190,7 @@ PLANS: dict[str, Plan] = {
                 "sgm",
                 "match",
                 "(uint8[:, :, ::1], float32[:, ::1], int64, int64, boolean, int64, float64,"
-                " float64, uint16[:, :, ::1], boolean)",
+                " float64, uint16[:, :, ::1], boolean, int32[:, :, ::1])",
             ),
             Entry("sgm", "speckles", "(float32[:, ::1], int64, float64)"),
             Entry("sgm", "median3", "(float32[:, ::1],)"),

@@ -227,13 +227,49 @@ _BIG = 16384
 
 
 @njit
-def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total, equiangular):  # type: ignore[no-untyped-def]  # pragma: no cover
+def _shifted(lp, g, out):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    """``out[k + 1] = L(k - g)`` of a padded path vector ``lp`` for ``g`` in 1/256 px.
+
+    ``lp`` holds ``L(0 .. D - 1)`` at ``1 .. D`` and ``_BIG`` at both ends; beyond them every
+    value is ``_BIG``. A fractional ``g`` interpolates linearly between the two whole shifts,
+    ``L(k - i) + ((L(k - i - 1) - L(k - i)) f + 128) >> 8`` with ``i = g >> 8``,
+    ``f = g & 255`` (integers: the NumPy twin gives the same numbers).
+    """
+    n = lp.shape[0] - 2
+    i = np.int64(g) >> 8
+    f = np.int32(np.int64(g) & 255)
+    big = np.int64(_BIG)
+    # k - i + 1 and k - i inside the padded vector: no test in the loop (vector lanes)
+    k0 = min(max(i, 0), n)
+    k1 = max(min(n, n + i + 1), k0)
+    if f == 0:
+        for k in range(k0, k1):
+            out[k + 1] = lp[k - i + 1]
+    else:
+        for k in range(k0, k1):
+            va = np.int32(lp[k - i + 1])
+            out[k + 1] = np.int16(va + (((np.int32(lp[k - i]) - va) * f + 128) >> 8))
+    for kk in range(n - (k1 - k0)):  # the ends: _BIG beyond the padded vector
+        k = kk if kk < k0 else kk - k0 + k1
+        a = k - i + 1
+        ea = np.int64(lp[a]) if 0 <= a <= n + 1 else big
+        eb = np.int64(lp[a - 1]) if 0 <= a - 1 <= n + 1 else big
+        out[k + 1] = np.int16(ea + (((eb - ea) * np.int64(f) + 128) >> 8))
+    return out
+
+
+@njit
+def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total, equiangular, slant):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Run the two raster passes of :func:`aggregate`; with ``fused``, :func:`select` too.
 
     Returns the sums ``uint16 (H, W, D)`` (in ``total``) and, with ``fused``, the
     disparities ``float32 (H, W)``: the second pass then adds its four paths of a row into a
     row buffer, not into the sums, and selects that row's disparities as soon as it is
-    complete (the volume of sums is not written a second time nor read again).
+    complete (the volume of sums is not written a second time nor read again). ``slant``
+    ``int32 (4, H, W)`` (or an empty array): the expected change of the disparity, in 1/256
+    px, along the steps ``(dx, dy) = (1, 0), (1, 1), (0, 1), (-1, 1)`` into each pixel (the
+    reverse steps its negation); each path then compares ``L_r(p, d)`` with
+    ``L_r(p - r, d - g)`` (:func:`_shifted`), a surface's slant costing no ``P1`` steps.
     """
     h, w, n = cost.shape
     big_end = np.int16(_BIG)
@@ -250,6 +286,10 @@ def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total, e
     cur_min = np.zeros((3, w + 2), dtype=np.int16)
     hor = np.zeros(n + 2, dtype=np.int16)  # the horizontal path (from x - s)
     acc = np.empty(n, dtype=np.int16)
+    use_slant = slant.shape[0] == 4
+    sh = np.empty(n + 2, dtype=np.int16)  # a path vector shifted by the slant
+    sh[0] = big_end
+    sh[n + 1] = big_end
     for sweep in range(2):
         s = 1 if sweep == 0 else -1
         into_row = fused and sweep == 1
@@ -275,9 +315,14 @@ def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total, e
                 q = p2 if xi == 0 else _p2(grey, y, x, y, x - s, p1, p2, adaptive)
                 big = np.int16(hmin + q)
                 m = np.int16(32767)
+                src = hor
+                if use_slant and xi > 0:
+                    g = slant[0, y, x] * s
+                    if g != 0:
+                        src = _shifted(hor, g, sh)
                 for k in range(n):
-                    a = np.int16(min(hor[k], hor[k + 2]) + q1)
-                    v = np.int16(np.int16(c[k]) + min(min(hor[k + 1], big), a) - hmin)
+                    a = np.int16(min(src[k], src[k + 2]) + q1)
+                    v = np.int16(np.int16(c[k]) + min(min(src[k + 1], big), a) - hmin)
                     acc[k] = v
                     m = min(m, v)
                 for k in range(n):  # (a slice assignment would test for overlap)
@@ -299,6 +344,10 @@ def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total, e
                         q = _p2(grey, y, x, yp, xp, p1, p2, adaptive)
                     lp = prev[j, xp + 1]
                     lm = prev_min[j, xp + 1]
+                    if use_slant and yi > 0 and 0 <= xp < w:
+                        g = slant[j + 1, y, x] * s
+                        if g != 0:
+                            lp = _shifted(lp, g, sh)
                     out = cur[j, x + 1]
                     big = np.int16(lm + q)
                     m = np.int16(32767)
@@ -317,7 +366,7 @@ def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total, e
 
 
 @njit
-def aggregate(cost, grey, p1, p2, adaptive):  # type: ignore[no-untyped-def]  # pragma: no cover
+def aggregate(cost, grey, p1, p2, adaptive, slant=None):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Sum ``uint16 (H, W, D)`` of the 8 paths' costs ``L_r`` (two raster passes).
 
     ``grey`` (H, W) float32 on a 0-255 scale: the intensities of the adaptive ``P2``.
@@ -329,14 +378,27 @@ def aggregate(cost, grey, p1, p2, adaptive):  # type: ignore[no-untyped-def]  # 
     with ``_BIG`` at both ends (no test for the neighbours ``d ± 1``).
     """
     total = np.empty(cost.shape, dtype=np.uint16)
-    return _sweeps(cost, grey, p1, p2, adaptive, False, 0, 1.0, -1.0, total, False)[0]
+    if slant is None:
+        none = np.zeros((0, 1, 1), dtype=np.int32)
+        return _sweeps(cost, grey, p1, p2, adaptive, False, 0, 1.0, -1.0, total, False, none)[0]
+    return _sweeps(cost, grey, p1, p2, adaptive, False, 0, 1.0, -1.0, total, False, slant)[0]
 
 
 @njit
 def match(  # type: ignore[no-untyped-def]  # pragma: no cover
-    cost, grey, p1, p2, adaptive, min_d, uniqueness, lr_check, total=None, equiangular=False
+    cost,
+    grey,
+    p1,
+    p2,
+    adaptive,
+    min_d,
+    uniqueness,
+    lr_check,
+    total=None,
+    equiangular=False,
+    slant=None,
 ):
-    """``select(aggregate(cost, grey, p1, p2, adaptive), min_d, uniqueness, lr_check, ...)``.
+    """``select(aggregate(cost, grey, p1, p2, adaptive, slant), min_d, uniqueness, ...)``.
 
     The same numbers, with each row selected as the second pass completes it. ``total``: an
     array ``uint16`` of the shape of ``cost`` for the sums of the first pass (its content is
@@ -345,7 +407,15 @@ def match(  # type: ignore[no-untyped-def]  # pragma: no cover
     if total is None:
         total = np.empty(cost.shape, dtype=np.uint16)
     keep = 1.0 - uniqueness
-    out = _sweeps(cost, grey, p1, p2, adaptive, True, min_d, keep, lr_check, total, equiangular)
+    if slant is None:
+        none = np.zeros((0, 1, 1), dtype=np.int32)
+        out = _sweeps(
+            cost, grey, p1, p2, adaptive, True, min_d, keep, lr_check, total, equiangular, none
+        )
+    else:
+        out = _sweeps(
+            cost, grey, p1, p2, adaptive, True, min_d, keep, lr_check, total, equiangular, slant
+        )
     return out[1]
 
 

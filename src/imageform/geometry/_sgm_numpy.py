@@ -119,6 +119,52 @@ def _step(
     return np.asarray(c + v - lpmin, dtype=np.int32)
 
 
+#: the value beyond both ends of a path's disparities (the kernel's ``_BIG``)
+_BIG = 16384
+
+
+def _shifted(lp: NDArray[np.int32], g: NDArray[np.int64]) -> NDArray[np.int32]:
+    """``L(k - g)`` of each line's path vector ``lp`` (N, D) for ``g`` (N,) in 1/256 px.
+
+    The kernel's ``_shifted``: ``_BIG`` beyond the ends, a fractional ``g`` interpolated
+    linearly in integers, ``L(k - i) + ((L(k - i - 1) - L(k - i)) f + 128) >> 8``.
+    """
+    n = lp.shape[1]
+    pad = np.full((lp.shape[0], n + 2), _BIG, dtype=np.int64)
+    pad[:, 1:-1] = lp
+    i = (g >> 8)[:, None]
+    f = (g & 255)[:, None]
+    k = np.arange(n)[None, :]
+
+    def at(a: NDArray[np.int64]) -> NDArray[np.int64]:
+        inside = (a >= 0) & (a <= n + 1)
+        return np.where(inside, np.take_along_axis(pad, np.clip(a, 0, n + 1), axis=1), _BIG)
+
+    va = at(k - i + 1)
+    vb = at(k - i)
+    out = np.where(f == 0, va, va + (((vb - va) * f + 128) >> 8))
+    return np.asarray(out, dtype=np.int32)
+
+
+def _step_slant(
+    c: NDArray[np.int32],
+    lp: NDArray[np.int32],
+    p1: int,
+    p2: NDArray[np.int32],
+    g: NDArray[np.int64] | None,
+) -> NDArray[np.int32]:
+    """:func:`_step` with the previous vectors shifted by the slant ``g`` (1/256 px)."""
+    if g is None or not g.any():
+        return _step(c, lp, p1, p2)
+    lpmin = lp.min(axis=1, keepdims=True)
+    sh = np.where((g != 0)[:, None], _shifted(lp, g), lp)
+    big = np.full((sh.shape[0], 1), _BIG, dtype=np.int64)
+    padded = np.concatenate([big, sh, big], axis=1)
+    v = np.minimum(sh, np.minimum(padded[:, :-2], padded[:, 2:]) + p1)
+    v = np.minimum(v, lpmin + p2[:, None])
+    return np.asarray(c + v - lpmin, dtype=np.int32)
+
+
 def _p2(a: NDArray[np.float32], b: NDArray[np.float32], p1: int, p2: int, adaptive: bool) -> Any:
     n = a.shape[0]
     if not adaptive:
@@ -128,12 +174,18 @@ def _p2(a: NDArray[np.float32], b: NDArray[np.float32], p1: int, p2: int, adapti
 
 
 def aggregate(
-    cost: NDArray[np.uint8], grey: NDArray[np.float32], p1: int, p2: int, adaptive: bool
+    cost: NDArray[np.uint8],
+    grey: NDArray[np.float32],
+    p1: int,
+    p2: int,
+    adaptive: bool,
+    slant: NDArray[np.int32] | None = None,
 ) -> NDArray[np.uint16]:
     """Sum of the 8 paths' ``L_r`` (the kernel's), as ``uint16 (H, W, D)``."""
     h, w, _n = cost.shape
     c32 = cost.astype(np.int32)
     total = np.zeros(cost.shape, dtype=np.int32)
+    sl = None if slant is None or slant.shape[0] != 4 else slant.astype(np.int64)
     for s in (1, -1):
         # horizontal: from x - s, column after column
         xs = range(w) if s == 1 else range(w - 1, -1, -1)
@@ -142,7 +194,9 @@ def aggregate(
             if lp is None:
                 L = c32[:, x]
             else:
-                L = _step(c32[:, x], lp, p1, _p2(grey[:, x], grey[:, x - s], p1, p2, adaptive))
+                g = None if sl is None else sl[0, :, x] * s
+                q = _p2(grey[:, x], grey[:, x - s], p1, p2, adaptive)
+                L = _step_slant(c32[:, x], lp, p1, q, g)
             total[:, x] += L
             lp = L
         # from the row before: x - s, x, x + s
@@ -158,7 +212,8 @@ def aggregate(
                     L = c32[y]
                 else:
                     q = _p2(grey[y], grey[y - s, xq], p1, p2, adaptive)
-                    L = np.where(inside[:, None], _step(c32[y], lp[xq], p1, q), c32[y])
+                    g = None if sl is None else np.where(inside, sl[j + 1, y] * s, 0)
+                    L = np.where(inside[:, None], _step_slant(c32[y], lp[xq], p1, q, g), c32[y])
                 total[y] += L
                 lp = L
     return total.astype(np.uint16)
@@ -239,9 +294,10 @@ def match(
     lr_check: float,
     total: NDArray[np.uint16] | None = None,
     equiangular: bool = False,
+    slant: NDArray[np.int32] | None = None,
 ) -> NDArray[np.float32]:
     """:func:`select` of :func:`aggregate` (the kernel fuses the two; ``total`` unused)."""
-    S = aggregate(cost, grey, p1, p2, adaptive)
+    S = aggregate(cost, grey, p1, p2, adaptive, slant)
     return select(S, min_d, uniqueness, lr_check, equiangular)
 
 

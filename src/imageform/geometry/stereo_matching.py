@@ -84,6 +84,17 @@ PLANE_HIDE = 0.2
 #: than ``PLANE_RECESS[1]`` (a recess seen past nearer surfaces; chosen on the tuning sets of
 #: ``benchmarks/check_stereo_recess.py``: 2 to 4 and 0.1 to 0.25 tried)
 PLANE_RECESS = (3.0, 0.15, 0.25)
+#: ``slant_prior``: the side of the square in which each pixel's plane is fitted (pixels),
+#: the largest root mean square residual of a fit taken (px), the largest slant taken and
+#: the least (px of disparity a pixel; the larger of the two axes'); chosen on the tuning
+#: sets of ``benchmarks/check_stereo_sgmp.py`` (fits 0.25, 0.35 and 0.5 px, least slants 0,
+#: 0.05, 0.1 and 0.15 tried: under 0.15 the da Vinci boards lose, 1.07 % more than 1 px off
+#: at 0.1 against 0.99 % without the prior; their fits of 0.1 to 0.2 are the first map's
+#: staircase on a board of slant 0.004)
+SLANT_WINDOW = 9
+SLANT_FIT = 0.25
+SLANT_MAX = 1.0
+SLANT_MIN = 0.15
 
 
 def _grey(image: Any, name: str) -> NDArray[np.float32]:
@@ -128,6 +139,7 @@ def stereo_disparity(
     census_step: float | None = CENSUS_STEP,
     cost_window: int = COST_WINDOW,
     plane_fill: bool = True,
+    slant_prior: bool = False,
 ) -> NDArray[np.float32]:
     r"""Disparity of a rectified stereo pair by semi-global matching on census costs.
 
@@ -162,7 +174,17 @@ def stereo_disparity(
            L_r(p, d) = C(p, d) + \min\bigl(L_r(p-r, d),\ L_r(p-r, d \pm 1) + P_1,\
            \min_k L_r(p-r, k) + P_2\bigr) - \min_k L_r(p-r, k)
 
-       summed, ``S(p, d) = Σ_r L_r(p, d)``.
+       summed, ``S(p, d) = Σ_r L_r(p, d)``. With ``slant_prior``, the paths run a second
+       time on the same costs and follow the slant of the first map (steps 2 to 4 and 6):
+       each pixel takes the least-squares plane ``d = a x + b y + c`` of the valid
+       disparities in the 9 x 9 window about it where that plane fits them within 0.25 px
+       (root mean square), ``|a|, |b| <= 1`` and ``max(|a|, |b|) >= 0.15`` (flatter fits are
+       mostly the staircase of a fronto-parallel bias), and the second pass compares
+       ``L_r(p, d)`` with ``L_r(p - r, d - g_r)``, ``g_r`` the plane's change of ``d`` along
+       the step ``r`` (a fraction interpolated linearly between the two whole shifts): a
+       surface slanted by ``g`` pixels of disparity a pixel costs no ``P1`` step every
+       ``1 / g`` pixels (SGM-P, D. Scharstein, T. Taniai, S. Sinha, 3DV 2017, its priors here
+       the first pass's own).
     3. **Winner-take-all** ``d = argmin S(p, ·)``, refined by the vertex of the
        equiangular V through ``S`` at ``d - 1, d, d + 1`` (two lines of opposite slopes;
        M. Shimizu & M. Okutomi 2001's fit for absolute-difference costs, which census
@@ -323,6 +345,17 @@ def stereo_disparity(
     plane_fill : bool
         Give flat regions the plane of their textured rim (step 6; default on). False: the
         map of before 2026-11-30h.
+    slant_prior : bool
+        Aggregate a second time along the slants of the first map (step 2; default off): 1.6
+        to 2.9 times the CPU time. On the tuning sets of ``benchmarks/check_stereo_sgmp.py``
+        (``benchmarks/results/stereo-sgmp-2026-12-01a.md``) the share of pixels more than 1 px
+        off falls on every set's mean or stays (webcam-1 boards 4.87 % to 4.23 %, webcam-2
+        8.43 % to 8.05 %, XIMEA 8.89 % to 8.77 %, Middlebury 2005 / 2006 3.99 % to 3.91 %,
+        ETH3D 4.64 % to 4.56 %, Middlebury 2003 / 2014 3.70 % to 3.68 %, MPI-Sintel 1.30 %
+        to 1.29 %, da Vinci 0.99 % to 1.00 %; teddy 5.37 % to 5.42 %); on the pairs held out
+        (``stereo-sgmp-2026-12-01c.md``) it did not: Middlebury 2005 Art and Laundry at 640 px
+        16.96 % to 17.00 %, KITTI 2012 pair 70 9.53 % to 9.70 % (denser, 86.3 % to 88.7 %
+        valid, fewer errors over 3 px; OpenCV 18.70 % and 11.35 %).
 
     Returns
     -------
@@ -410,6 +443,8 @@ def stereo_disparity(
         raise TypeError(f"expected median_filter as a bool, got {describe(median_filter)}")
     if not isinstance(plane_fill, bool | np.bool_):
         raise TypeError(f"expected plane_fill as a bool, got {describe(plane_fill)}")
+    if not isinstance(slant_prior, bool | np.bool_):
+        raise TypeError(f"expected slant_prior as a bool, got {describe(slant_prior)}")
     check_memory(3.0 * h * w * n_d, "num_disparities", f"the costs of {h} x {w} px x {n_d}")
     if use_numba(gl):
         from imageform._kernels import sgm as kern
@@ -419,7 +454,7 @@ def stereo_disparity(
         gl, gr = np.ascontiguousarray(gl.T), np.ascontiguousarray(gr.T)
     d = _match(
         kern, gl, gr, min_d, n_d, bs, P1, P2, bool(adaptive_p2), u, lr, sp, sr, equiangular,
-        bool(median_filter), thr, step, cw,
+        bool(median_filter), thr, step, cw, bool(slant_prior), bool(plane_fill),
     )  # fmt: skip
     if plane_fill:
         d = _plane_fill(d, gl, min_d, n_d, gr)
@@ -445,8 +480,14 @@ def _match(
     census_threshold: float = 0.0,
     census_step: float = -1.0,
     cost_window: int = 1,
+    slant: bool = False,
+    fill: bool = False,
 ) -> NDArray[np.float32]:
-    """Run the pipeline on checked grey images with the kernels (or twins) of module ``kern``."""
+    """Run the pipeline on checked grey images with the kernels (or twins) of module ``kern``.
+
+    With ``slant``, a second aggregation whose paths follow the slants (:func:`_slants`) of
+    the first one's map (given the plane fill first with ``fill``), on the same costs.
+    """
     r = bs // 2
     thr, step = np.float32(census_threshold), np.float32(census_step)
     cl = kern.census(gl, r, thr, step)
@@ -462,15 +503,69 @@ def _match(
     else:
         cost = kern.cost_volume(cl, cr, min_d, n_d, nbits, vol)
     total = np.empty((h, w, n_d), dtype=np.uint16)
+    none = np.zeros((0, 1, 1), dtype=np.int32)  # no slant: one compiled signature for both
     disp = kern.match(
-        cost, gl, p1, p2, adaptive, min_d, float(uniqueness), float(lr), total, equiangular
+        cost, gl, p1, p2, adaptive, min_d, float(uniqueness), float(lr), total, equiangular, none
     )
+    if slant:
+        first = _plane_fill(disp, gl, min_d, n_d, gr) if fill else disp
+        disp = kern.match(
+            cost, gl, p1, p2, adaptive, min_d, float(uniqueness), float(lr), total, equiangular,
+            _slants(first),
+        )  # fmt: skip
     del cost, total
     if median:
         disp = kern.median3(disp)
     if speckle_size > 0:
         kern.speckles(disp, speckle_size, float(speckle_range))
     return np.asarray(disp, dtype=np.float32)
+
+
+def _slants(disp: NDArray[np.float32]) -> NDArray[np.int32]:
+    """Return the prior of :func:`stereo_disparity`'s second pass: each local plane's slant.
+
+    The least-squares plane ``d = a x + b y + c`` of the valid disparities in the
+    ``SLANT_WINDOW`` square about each pixel (box sums of the moments); where its root mean
+    square residual is under ``SLANT_FIT`` px, at least a third of the window is valid,
+    ``|a|, |b| <= SLANT_MAX`` and ``max(|a|, |b|) >= SLANT_MIN``, the changes of ``d`` along
+    the steps ``(1, 0), (1, 1), (0, 1), (-1, 1)``, ``a, a + b, b, b - a``, in 1/256 px
+    (``int32 (4, H, W)``); 0 elsewhere (a window across an occluding edge fits no plane).
+    """
+    from scipy import ndimage
+
+    h, w = disp.shape
+    win = SLANT_WINDOW
+    v = np.isfinite(disp)
+    z = np.where(v, disp, 0.0).astype(np.float64)
+    vf = v.astype(np.float64)
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float64)
+    xx -= 0.5 * w
+    yy -= 0.5 * h
+
+    def box(a: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.asarray(ndimage.uniform_filter(a, win, mode="constant"), dtype=np.float64)
+
+    s1, sx, sy = box(vf), box(vf * xx), box(vf * yy)
+    sxx, sxy, syy = box(vf * xx * xx), box(vf * xx * yy), box(vf * yy * yy)
+    sz, sxz, syz, szz = box(z), box(z * xx), box(z * yy), box(z * z)
+    # the normal equations' symmetric 3 x 3 matrix solved by its cofactors
+    c00, c01, c02 = syy * s1 - sy * sy, sx * sy - sxy * s1, sxy * sy - syy * sx
+    c11, c12, c22 = sxx * s1 - sx * sx, sxy * sx - sxx * sy, sxx * syy - sxy * sxy
+    det = sxx * c00 + sxy * c01 + sx * c02
+    ok = (s1 >= 1.0 / 3.0) & (det > 0.1 * s1**3)  # a full window's det is ~45 s1^3
+    det = np.where(ok, det, 1.0)
+    a = (c00 * sxz + c01 * syz + c02 * sz) / det
+    bb = (c01 * sxz + c11 * syz + c12 * sz) / det
+    c = (c02 * sxz + c12 * syz + c22 * sz) / det
+    quad = a * a * sxx + bb * bb * syy + c * c * s1 + 2 * (a * bb * sxy + a * c * sx + bb * c * sy)
+    ms = (szz - 2 * (a * sxz + bb * syz + c * sz) + quad) / np.maximum(s1, 1e-9)
+    ok &= ms < SLANT_FIT**2
+    ok &= (np.abs(a) <= SLANT_MAX) & (np.abs(bb) <= SLANT_MAX)
+    ok &= np.maximum(np.abs(a), np.abs(bb)) >= SLANT_MIN
+    a = np.where(ok, a, 0.0)
+    bb = np.where(ok, bb, 0.0)
+    steps = np.stack([a, a + bb, bb, bb - a])
+    return np.ascontiguousarray(np.floor(steps * 256.0 + 0.5).astype(np.int32))
 
 
 def _plane_fill(

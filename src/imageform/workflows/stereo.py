@@ -464,6 +464,13 @@ class DepthOptions(ImageIn):
         "texture follow their slant; --no-plane-fill keeps the matched values (before "
         "2026-11-30h).",
     )
+    slant_prior: bool = option(
+        False,
+        help="Match twice: the second time each path follows the slant of the first map's "
+        "local planes, so slanted surfaces (ground, walls seen at an angle, a tilted board) "
+        "cost no disparity steps along the paths: fewer errors on them, 2-3 times the "
+        "matching time.",
+    )
 
 
 def _pair_image(path: Path, opts: DepthOptions, size: tuple[int, int] | None, side: str) -> Any:
@@ -580,6 +587,7 @@ def depth_cmd(run: Run, opts: DepthOptions, *, out: Path, left: Path, right: Pat
         census_step=opts.census_step,
         cost_window=opts.cost_window,
         plane_fill=opts.plane_fill,
+        slant_prior=opts.slant_prior,
         vertical=rect.vertical,
     )
     # left pixels whose source lies outside the left image hold no measurement
