@@ -5,7 +5,7 @@ or ``simulate``) and caches them on disk (``imageform._kernels.jit``: the policy
 location). ``imageform cache --warm`` pays that once, ahead of time: after installing, in a
 container image, or before a CI test run. It runs the commands people wait on (``simulate`` with its
 built-in scene, ``pose --ransac`` with a Brown-Conrady camera, ``demosaic`` with each method,
-``convert``, ``calibrate`` on three checkerboard views, ``undistort`` (colour and grey), ``depth``,
+``convert``, ``calibrate`` on three checkerboard views, ``undistort``, ``depth``,
 ``track`` with a ChArUco board and with one ArUco marker, ``vanishing``, ``develop``,
 ``characterize`` (board, chart, slanted edge), ``segment``, ``delta-e``, and ``reconstruct`` on five
 frames of a textured room when OpenCV is installed) on small inputs it writes to
@@ -145,8 +145,6 @@ def _jobs(work: Path) -> list[list[str]]:
         ["convert", f"{w}/rgb8.png", "--from", "srgb", "--to", "lab", "-o", f"{w}/lab.tif"],
         ["calibrate", f"{w}/board*.png", "--board", "9x6", "--square", "30mm", "-o", f"{w}/c.toml"],
         ["undistort", f"{w}/board_rgb.png", "--camera", f"{w}/cam.toml", "-o", f"{w}/u.png"],
-        # a grey photograph takes another signature of the fused undistortion (3.8 s of CPU)
-        ["undistort", f"{w}/board0.png", "--camera", f"{w}/cam.toml", "-o", f"{w}/u1.png"],
         ["segment", f"{w}/rgb8.png", "-o", f"{w}/mask.png"],
         ["delta-e", f"{w}/rgb8.png", f"{w}/rgb8.png", "--json"],
         [
@@ -191,12 +189,14 @@ def _jobs(work: Path) -> list[list[str]]:
         # the full line-segment detector (vanishing and horizon; simulate's analysis uses it too)
         ["vanishing", f"{w}/board_rgb.png", "-o", f"{w}/vp.png"],
         ["develop", f"{w}/raw.dng", "-o", f"{w}/dev.png"],
-        # the checkerboard, chart and slanted-edge kernels as characterize calls them
+        # the chart and slanted-edge kernels as characterize calls them (late: calibrate's
+        # board kernels are compiled by then)
         ["characterize", f"{w}/lab", "-o", f"{w}/twin"],
     ]
     if importlib.util.find_spec("cv2") is not None:  # the reconstruct extra (SIFT)
-        # the 5-point RANSAC, relative pose, PnP and bundle adjustment (10-17 s of CPU)
-        jobs.append(["reconstruct", f"{w}/room", "--camera", f"{w}/room.toml", "-o", f"{w}/rec"])
+        # the 5-point RANSAC, relative pose, PnP and bundle adjustment (10-30 s of CPU, most
+        # of it one kernel): started second, beside simulate, the longest two first
+        jobs.insert(1, ["reconstruct", f"{w}/room", "--camera", f"{w}/room.toml", "-o", f"{w}/rec"])
     # 8-bit mosaics only: 16-bit ones run the same float32 kernels
     for method in ("menon", "bilinear", "malvar", "hamilton-adams"):
         out = f"{w}/rgb-{method}.png"
