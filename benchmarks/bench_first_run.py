@@ -670,12 +670,15 @@ def main() -> None:
         f"load average at the start {load0}, at the end {_load()}; imageform from "
         f"{a.python or src}; median of {a.repeat}; first = empty `NUMBA_CACHE_DIR`; "
         "CPU = user + system seconds of the process and its threads",
-        "",
-        "| command | first (s) | warm (s) | first / warm | first range | warm range "
-        "| first CPU (s) | warm CPU (s) |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|",
-        *rows,
     ]
+    if rows:
+        lines += [
+            "",
+            "| command | first (s) | warm (s) | first / warm | first range | warm range "
+            "| first CPU (s) | warm CPU (s) |",
+            "|---|---:|---:|---:|---:|---:|---:|---:|",
+            *rows,
+        ]
     if against is not None:
         lines += [
             "",
