@@ -20,9 +20,11 @@ repetition takes a new folder per command. ``--warm-cache``: also time ``imagefo
 another path (a second clone or a reinstall of the same version on the same machine: it
 should find everything compiled); ``--after-warm CMDS`` then also times those commands on a copy
 of the cache that ``imageform cache --warm`` alone filled (what a user who ran it after
-installing waits). ``--against DIR``: the same commands from another source tree (the code
-before a change), interleaved with this one's (the order alternating between repetitions), each
-on its own empty cache: a second table gives both, and their difference first - warm.
+installing waits; with ``--profile``, the CPU seconds each still compiles there, all in its own
+process; ``--no-first`` leaves out the first/warm runs). ``--against DIR``: the same commands
+from another source tree (the code before a change), interleaved with this one's (the order
+alternating between repetitions), each on its own empty cache: a second table gives both, and
+their difference first - warm.
 ``--profile``: each first run also records the CPU seconds
 numba spends compiling each kernel (numba's ``numba:compile`` events; nested compilations
 are counted inside their caller) and prints the largest per command. The table gives
