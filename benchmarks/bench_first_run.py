@@ -20,9 +20,11 @@ repetition takes a new folder per command. ``--warm-cache``: also time ``imagefo
 another path (a second clone or a reinstall of the same version on the same machine: it
 should find everything compiled); ``--after-warm CMDS`` then also times those commands on a copy
 of the cache that ``imageform cache --warm`` alone filled (what a user who ran it after
-installing waits). ``--against DIR``: the same commands from another source tree (the code
-before a change), interleaved with this one's (the order alternating between repetitions), each
-on its own empty cache: a second table gives both, and their difference first - warm.
+installing waits; with ``--profile``, the CPU seconds each still compiles there, all in its own
+process; ``--no-first`` leaves out the first/warm runs). ``--against DIR``: the same commands
+from another source tree (the code before a change), interleaved with this one's (the order
+alternating between repetitions), each on its own empty cache: a second table gives both, and
+their difference first - warm.
 ``--profile``: each first run also records the CPU seconds
 numba spends compiling each kernel (numba's ``numba:compile`` events; nested compilations
 are counted inside their caller) and prints the largest per command. The table gives
@@ -515,6 +517,20 @@ def _inputs(python: str, src: Path | None, w: Path) -> None:
     )
 
 
+def _compiled(recs: list[dict[str, object]]) -> tuple[float, int, str]:
+    """CPU seconds compiling (top-level compilations), their count, the four largest."""
+    top = [r for r in recs if r["depth"] == 0]
+    total = sum(float(str(r["incl"])) for r in top)
+    big = sorted(top, key=lambda r: -float(str(r["incl"])))[:4]
+    what = ", ".join(f"{r['kernel']} {float(str(r['incl'])):.1f}" for r in big)
+    return total, len(recs), what
+
+
+def _compiling(recs: list[dict[str, object]]) -> str:
+    total, n, what = _compiled(recs)
+    return f"{total:.1f} s in {n} compilations; {what}"
+
+
 def _load() -> str:
     if not hasattr(os, "getloadavg"):
         return "n/a"
@@ -534,6 +550,11 @@ def main() -> None:
     ap.add_argument("--write", type=Path, default=None, help="append the table to this file")
     ap.add_argument(
         "--against", type=Path, default=None, help="another src tree (before): interleaved A/B"
+    )
+    ap.add_argument(
+        "--no-first",
+        action="store_true",
+        help="skip the first/warm runs (with --warm-cache --after-warm: only those)",
     )
     ap.add_argument(
         "--after-warm",
@@ -560,6 +581,7 @@ def main() -> None:
         first: dict[str, list[tuple[float, float]]] = {n: [] for n in names}
         warm: dict[str, list[tuple[float, float]]] = {n: [] for n in names}
         compiled: dict[str, list[dict[str, object]]] = {}
+        compiled_aw: dict[str, list[dict[str, object]]] = {}  # after cache --warm (--profile)
         warming: list[tuple[float, float]] = []
         after_warm: dict[str, list[tuple[float, float]]] = {}
         clone: list[tuple[float, float]] = []
@@ -568,7 +590,7 @@ def main() -> None:
         before: dict[str, list[tuple[float, float]]] = {n: [] for n in names}
         before_warm: dict[str, list[tuple[float, float]]] = {n: [] for n in names}
         for i in range(a.repeat):
-            for name in names:
+            for name in [] if a.no_first else names:
                 trees = [("", src), ("before", against)] if against else [("", src)]
                 for label, tree in trees if i % 2 == 0 else trees[::-1]:
                     cache = work / f"cache-{name}-{i}{label}"
@@ -607,11 +629,24 @@ def main() -> None:
                     xdg = cache.parent / (cache.name + "-xdg")
                     if xdg.exists():
                         shutil.copytree(xdg, copy.parent / (copy.name + "-xdg"))
+                    # --profile: what the command still compiles, all of it in its own process
+                    # (no second process: IMAGEFORM_COMPILE_AHEAD=0)
+                    prof = work / f"prof-aw-{name}.json" if a.profile and i == 0 else None
+                    env = _env(src, copy)
+                    if prof is not None:
+                        env["IMAGEFORM_COMPILE_AHEAD"] = "0"
                     after_warm.setdefault(name, []).append(
-                        _run(python, commands[name], _env(src, copy), work)
+                        _run(python, commands[name], env, work, prof)
                     )
+                    if prof is not None:
+                        compiled_aw[name] = json.loads(prof.read_text())
                     shutil.rmtree(copy, ignore_errors=True)
-                    print(f"{name} #{i} after cache --warm: {after_warm[name][-1][0]:.2f} s")
+                    print(
+                        f"{name} #{i} after cache --warm: {after_warm[name][-1][0]:.2f} s "
+                        f"({after_warm[name][-1][1]:.2f} CPU)"
+                        + (f", {_compiling(compiled_aw[name])}" if prof is not None else ""),
+                        flush=True,
+                    )
                 shutil.rmtree(cache, ignore_errors=True)
                 print(
                     f"#{i}: cache --warm {warming[-1][0]:.2f} s ({warming[-1][1]:.2f} CPU), "
@@ -626,7 +661,7 @@ def main() -> None:
         return f"{min(r[0] for r in runs):.2f}-{max(r[0] for r in runs):.2f}"
 
     rows = []
-    for name in names:
+    for name in [] if a.no_first else names:
         f, m = med(first[name], 0), med(warm[name], 0)
         rows.append(
             f"| `{name}` | {f:.2f} | {m:.2f} | {f / m:.2f} | {span(first[name])} "
@@ -637,12 +672,15 @@ def main() -> None:
         f"load average at the start {load0}, at the end {_load()}; imageform from "
         f"{a.python or src}; median of {a.repeat}; first = empty `NUMBA_CACHE_DIR`; "
         "CPU = user + system seconds of the process and its threads",
-        "",
-        "| command | first (s) | warm (s) | first / warm | first range | warm range "
-        "| first CPU (s) | warm CPU (s) |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|",
-        *rows,
     ]
+    if rows:
+        lines += [
+            "",
+            "| command | first (s) | warm (s) | first / warm | first range | warm range "
+            "| first CPU (s) | warm CPU (s) |",
+            "|---|---:|---:|---:|---:|---:|---:|---:|",
+            *rows,
+        ]
     if against is not None:
         lines += [
             "",
@@ -661,7 +699,25 @@ def main() -> None:
                 f"| {med(first[name], 1):.2f} | {wb:.2f} | {wa:.2f} | {fb - wb:.2f} "
                 f"| {fa - wa:.2f} |"
             )
-    if after_warm:
+    if after_warm and a.no_first:
+        lines += [
+            "",
+            "A first run on a cache that only `imageform cache --warm` filled (median; CPU "
+            "seconds compiling and compilations: numba's compile events, all in the command: "
+            "IMAGEFORM_COMPILE_AHEAD=0):",
+            "",
+            "| command | after cache --warm (s) | CPU (s) | compiling (CPU s) | compilations "
+            "| largest |",
+            "|---|---:|---:|---:|---:|---|",
+        ]
+        for name, runs in after_warm.items():
+            recs = compiled_aw.get(name)
+            total, n, what = _compiled(recs) if recs is not None else (0.0, 0, "n/a")
+            lines.append(
+                f"| `{name}` | {med(runs, 0):.2f} | {med(runs, 1):.2f} | {total:.1f} | {n} "
+                f"| {what} |"
+            )
+    elif after_warm:
         lines += [
             "",
             "A first run on a cache that only `imageform cache --warm` filled (median):",
@@ -685,11 +741,7 @@ def main() -> None:
     if compiled:
         lines += ["", "CPU seconds compiling (first run), the largest kernels per command:", ""]
         for name, recs in compiled.items():
-            top = [r for r in recs if r["depth"] == 0]
-            total = sum(float(str(r["incl"])) for r in top)
-            big = sorted(top, key=lambda r: -float(str(r["incl"])))[:4]
-            what = ", ".join(f"{r['kernel']} {float(str(r['incl'])):.1f}" for r in big)
-            lines.append(f"- `{name}`: {total:.1f} s in {len(recs)} compilations; {what}")
+            lines.append(f"- `{name}`: {_compiling(recs)}")
     text = "\n".join(lines)
     print(text)
     if a.write:

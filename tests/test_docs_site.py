@@ -13,6 +13,7 @@ import functools
 import http.server
 import importlib
 import importlib.util
+import json
 import os
 import re
 import subprocess
@@ -49,37 +50,54 @@ def _require(what: str) -> None:
     pytest.skip(f"{what} not installed")
 
 
-@pytest.fixture(scope="module")
-def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    try:
-        importlib.import_module("mkdocs")
-        importlib.import_module("mkdocstrings")
-    except ImportError:
-        _require('MkDocs (pip install -e ".[docs]")')
-    out = tmp_path_factory.mktemp("site")
+def _build(out: Path) -> str:
+    """``mkdocs build --strict`` into ``out``: its log (the build's failure fails the test)."""
     env = {
         **os.environ,
         "NO_MKDOCS_2_WARNING": "1",
         "MPLBACKEND": "Agg",
         "PYTHONPATH": str(ROOT / "src"),
     }
-    # the build writes the gallery into docs/generated: two xdist workers that both build
-    # (this module's tests split between them) take turns, or the gallery races
-    lock_dir = ROOT / "docs" / "generated"
-    lock_dir.mkdir(parents=True, exist_ok=True)
-    with open(lock_dir / ".build.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        done = subprocess.run(
-            [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
-            cwd=ROOT,
-            env=env,
-            capture_output=True,
-            text=True,
-            check=False,
-        )
+    done = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     log = done.stdout + done.stderr
     assert done.returncode == 0, f"mkdocs build --strict failed:\n{log[-4000:]}"
-    warnings = [line for line in log.splitlines() if "WARNING" in line]
+    return log
+
+
+@pytest.fixture(scope="session")
+def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The site, built once per test run (about 34 s of CPU): the pytest-xdist workers that
+    run this module's tests (split between them) share one build, in the run's own folder
+    (PYTEST_XDIST_TESTRUNUID), the first worker building it while the others wait."""
+    try:
+        importlib.import_module("mkdocs")
+        importlib.import_module("mkdocstrings")
+    except ImportError:
+        _require('MkDocs (pip install -e ".[docs]")')
+    run = os.environ.get("PYTEST_XDIST_TESTRUNUID")
+    if run:  # the workers' base folders share a parent, this run's alone
+        shared = tmp_path_factory.getbasetemp().parent / f"site-{run}"
+        shared.mkdir(exist_ok=True)
+    else:
+        shared = tmp_path_factory.mktemp("site-build")
+    out, built = shared / "site", shared / "built.log"
+    # the build also writes the gallery into docs/generated: two test runs of this checkout
+    # at once take turns
+    lock_dir = ROOT / "docs" / "generated"
+    lock_dir.mkdir(parents=True, exist_ok=True)
+    with open(shared / ".lock", "w") as mine, open(lock_dir / ".build.lock", "w") as lock:
+        fcntl.flock(mine, fcntl.LOCK_EX)
+        if not built.is_file():
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            built.write_text(_build(out))
+    warnings = [line for line in built.read_text().splitlines() if "WARNING" in line]
     assert warnings == [], "\n".join(warnings)
     return out
 
@@ -201,7 +219,11 @@ class _QuietHandler(http.server.SimpleHTTPRequestHandler):
 
 def test_the_site_in_headless_chromium(site: Path, served: str) -> None:
     """Every page loads without console errors, every image renders, nothing is fetched from
-    outside the site, and the search finds "vanishing point"."""
+    outside the site, and the search finds "vanishing point".
+
+    Each page's search worker gets an index of one page while the pages load (the theme's
+    worker fetches and indexes the whole search_index.json, 2.3 MB, on every page: half of
+    this test's time); the search at the end gets the site's own index."""
     if not CHROMIUM.is_file():
         _require(f"Chromium ({CHROMIUM})")
     try:
@@ -224,6 +246,13 @@ def test_the_site_in_headless_chromium(site: Path, served: str) -> None:
                 "request",
                 lambda r: None if r.url.startswith((served, "data:")) else outside.append(r.url),
             )
+            index = json.loads((site / "search" / "search_index.json").read_text("utf-8"))
+            small = json.dumps({**index, "docs": index["docs"][:1]})
+            route = f"{served}/search/search_index.json"
+            page.route(
+                route,
+                lambda r: r.fulfill(status=200, content_type="application/json", body=small),
+            )
             for path in _pages(site):
                 rel = path.relative_to(site).as_posix()
                 errors.clear()
@@ -235,6 +264,7 @@ def test_the_site_in_headless_chromium(site: Path, served: str) -> None:
                 if errors or broken:
                     problems.append(f"{rel}: console {errors[:3]}, broken images {broken[:3]}")
             assert outside == [], f"the site fetched from outside itself: {outside[:5]}"
+            page.unroute(route)
             page.goto(f"{served}/index.html", wait_until="load")
             page.keyboard.press("/")  # the theme's shortcut to the search box
             page.locator("input[data-md-component='search-query']").fill("vanishing point")

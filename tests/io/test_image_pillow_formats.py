@@ -313,3 +313,15 @@ def test_bmp_header_promising_more_rows_than_the_file_holds_is_refused_before_de
     path.write_bytes(_bmp(INDEX, PALETTE, bits=8, size=(8000, 8000)))
     with pytest.raises(InvalidInputError, match=r"the file is truncated \(\d+ bytes, its header"):
         read_image(path)
+
+
+@pytest.mark.parametrize(
+    ("suffix", "channels"), [(".jpg", 1), (".jpg", 3), (".bmp", 1), (".bmp", 3), (".webp", 3)]
+)
+def test_pillow_decodes_are_writeable(tmp_path: Path, suffix: str, channels: int) -> None:
+    """Pillow's array is read-only; read_image's is not, as a PNG's: numba compiles every
+    kernel again for a read-only array (a JPEG's first undistort after cache --warm)."""
+    path = tmp_path / f"im{suffix}"
+    Image.fromarray(RGB[..., 0] if channels == 1 else RGB).save(path)
+    a = np.asarray(read_image(path))
+    assert a.flags.writeable and a.shape[-1] == channels

@@ -5,14 +5,17 @@ or ``simulate``) and caches them on disk (``imageform._kernels.jit``: the policy
 location). ``imageform cache --warm`` pays that once, ahead of time: after installing, in a
 container image, or before a CI test run. It runs the commands people wait on (``simulate`` with its
 built-in scene, ``pose --ransac`` with a Brown-Conrady camera, ``demosaic`` with each method,
-``convert``, ``calibrate`` on three checkerboard views, ``undistort``, ``depth``, ``track`` with a
-ChArUco board and with one ArUco marker, ``vanishing``, ``develop``) on small inputs it writes to
+``convert``, ``calibrate`` on three checkerboard views, ``undistort``, ``depth``,
+``track`` with a ChArUco board and with one ArUco marker, ``vanishing``, ``develop``,
+``characterize`` (board, chart, slanted edge), ``segment``, ``delta-e``, and ``reconstruct`` on five
+frames of a textured room when OpenCV is installed) on small inputs it writes to
 a temporary folder, each in its own process (``--jobs`` at once), so that every kernel they use is
 compiled for the same types and layouts as a real run, and written to the cache.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import subprocess
@@ -85,6 +88,51 @@ for name, face in (("charuco", chart), ("marker", marker)):
 from imageform.io import write_dng
 raw = (rng.uniform(0.05, 0.8, (64, 96)) * 4095).astype(np.uint16)
 write_dng(work / "raw.dng", raw, white_level=4095, color_matrix=np.eye(3))
+# characterize: a lab folder of the three board views, a ColorChecker photograph and a
+# slanted edge (a dark square turned 5 degrees, 4 x 4 rays a pixel)
+from imageform.analysis import synthetic_chart_photo
+lab = work / "lab"
+for part in ("checkerboard", "colorchecker", "edge"):
+    (lab / part).mkdir(parents=True)
+(lab / "lab.toml").write_text('[checkerboard]\nboard = "9x6"\nsquare = "30mm"\n')
+for k in range(3):
+    (lab / "checkerboard" / f"view{k}.png").write_bytes((work / f"board{k}.png").read_bytes())
+photo = synthetic_chart_photo(shape=(240, 320), width=0.6, tilt=10.0, rotation=3.0, rng=1)
+write_image(lab / "colorchecker" / "developed.png", (photo.image * 255 + 0.5).astype(np.uint8))
+ys, xs = (np.mgrid[0:160 * 4, 0:200 * 4] + 0.5) / 4.0
+c, s = np.cos(np.radians(5.0)), np.sin(np.radians(5.0))
+a, b = c * (xs - 100) + s * (ys - 80), -s * (xs - 100) + c * (ys - 80)
+edge = np.where((np.abs(a) < 45) & (np.abs(b) < 45), 0.1, 0.8).reshape(160, 4, 200, 4).mean((1, 3))
+edge = np.where(edge <= 0.0031308, 12.92 * edge, 1.055 * edge ** (1 / 2.4) - 0.055)
+edge8 = (edge * 255 + 0.5).astype(np.uint8)
+write_image(lab / "edge" / "edge.png", np.repeat(edge8[..., None], 3, axis=2))
+# reconstruct: 5 frames (320 x 240) walking down a box room (4 x 6 x 2.5 m) whose walls carry
+# blotchy random textures, ray-cast exactly (a ray's hit: the first wall it leaves the box by)
+from imageform.geometry import look_at
+(work / "room").mkdir()
+Kr = np.array([[240.0, 0.0, 159.5], [0.0, 240.0, 119.5], [0.0, 0.0, 1.0]])
+tex = 0.6 * rng.uniform(0, 1, (6, 40, 40, 3)).repeat(8, 1).repeat(8, 2)
+tex = ((tex + 0.4 * rng.uniform(0, 1, (6, 160, 160, 3)).repeat(2, 1).repeat(2, 2)) * 255)
+tex = tex.astype(np.uint8)  # (6, 320, 320, 3), a texel 1/64 m, tiled
+vv, uu = np.mgrid[0:240, 0:320].astype(np.float64)
+rays = np.linalg.solve(Kr, np.stack([uu.ravel(), vv.ravel(), np.ones(uu.size)]))
+lo, hi = np.zeros(3), np.array([4.0, 6.0, 2.5])
+for i in range(5):
+    s = i / 4
+    eye = np.array([2.0 + 0.3 * np.sin(2 * np.pi * s), 1.0 + 1.5 * s, 1.4])
+    ahead = eye + np.array([0.6 * np.sin(1.5 * np.pi * s), 2.0, -0.2])
+    d = (np.asarray(look_at(eye, ahead, up=(0.0, 0.0, 1.0)).R).T @ rays).T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(d > 0, (hi - eye) / d, (lo - eye) / d)
+    t[~np.isfinite(t)] = np.inf
+    axis = np.argmin(t, axis=1)
+    rows = np.arange(len(t))
+    p = eye + d * t[rows, axis][:, None]
+    face = 2 * axis + (d[rows, axis] > 0)
+    ta = (np.where(axis == 0, p[:, 1], p[:, 0]) * 64).astype(int) % 320
+    tb = (np.where(axis == 2, p[:, 1], p[:, 2]) * 64).astype(int) % 320
+    write_image(work / "room" / f"view{i}.png", tex[face, tb, ta].reshape(240, 320, 3))
+write_camera(work / "room.toml", Camera(Kr, image_size=(320, 240)))
 """
 
 
@@ -97,6 +145,8 @@ def _jobs(work: Path) -> list[list[str]]:
         ["convert", f"{w}/rgb8.png", "--from", "srgb", "--to", "lab", "-o", f"{w}/lab.tif"],
         ["calibrate", f"{w}/board*.png", "--board", "9x6", "--square", "30mm", "-o", f"{w}/c.toml"],
         ["undistort", f"{w}/board_rgb.png", "--camera", f"{w}/cam.toml", "-o", f"{w}/u.png"],
+        ["segment", f"{w}/rgb8.png", "-o", f"{w}/mask.png"],
+        ["delta-e", f"{w}/rgb8.png", f"{w}/rgb8.png", "--json"],
         [
             "depth",
             f"{w}/pair_l.png",
@@ -139,7 +189,14 @@ def _jobs(work: Path) -> list[list[str]]:
         # the full line-segment detector (vanishing and horizon; simulate's analysis uses it too)
         ["vanishing", f"{w}/board_rgb.png", "-o", f"{w}/vp.png"],
         ["develop", f"{w}/raw.dng", "-o", f"{w}/dev.png"],
+        # the chart and slanted-edge kernels as characterize calls them (late: calibrate's
+        # board kernels are compiled by then)
+        ["characterize", f"{w}/lab", "-o", f"{w}/twin"],
     ]
+    if importlib.util.find_spec("cv2") is not None:  # the reconstruct extra (SIFT)
+        # the 5-point RANSAC, relative pose, PnP and bundle adjustment (10-30 s of CPU, most
+        # of it one kernel): started second, beside simulate, the longest two first
+        jobs.insert(1, ["reconstruct", f"{w}/room", "--camera", f"{w}/room.toml", "-o", f"{w}/rec"])
     # 8-bit mosaics only: 16-bit ones run the same float32 kernels
     for method in ("menon", "bilinear", "malvar", "hamilton-adams"):
         out = f"{w}/rgb-{method}.png"

@@ -1187,7 +1187,10 @@ def _read_pillow(p: Path, limit: int, fmt: str = "jpeg", frame: int | None = Non
         raise
     except (OSError, SyntaxError, ValueError) as exc:  # UnidentifiedImageError is an OSError
         raise UnreadableFileError(p, f"{_one_line(exc)}") from None
-    return _orient(arr, orientation)
+    out = _orient(arr, orientation)
+    # Pillow's buffer is read-only: numba compiles a kernel again for a read-only array (a
+    # JPEG's first undistort compiled 3.8 s of CPU after cache --warm had compiled the PNG's)
+    return out if out.flags.writeable else out.copy()
 
 
 def _cmyk_profile(im: Any) -> bytes | None:
