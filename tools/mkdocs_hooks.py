@@ -79,6 +79,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "compile-simulate": "benchmarks/bench_first_run.py",
     "corner-refinement": "benchmarks/check_corner_refinement.py",
     "dask-graphs": "benchmarks/check_dask_graphs.py",
+    "dask-stains": "benchmarks/bench_dask_stains.py",
     "delta-e": "benchmarks/bench_delta_e.py",
     "demosaic": "benchmarks/bench_demosaic.py",
     "dicom": "benchmarks/check_dicom.py",
