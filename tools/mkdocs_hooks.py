@@ -101,6 +101,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "local-homography": "benchmarks/check_local_homography.py",
     "lsd": "benchmarks/bench_lsd.py",
     "locus": "benchmarks/bench_locus.py",
+    "locus-device": "benchmarks/bench_locus_device.py",
     "odd-files": "benchmarks/check_odd_files.py",
     "partial-board": "benchmarks/check_partial_board.py",
     "plumb-line": "benchmarks/check_plumb_line.py",
