@@ -125,6 +125,11 @@ class BlockPasses:
             for g in grid
         ]
 
+    @property
+    def rows(self) -> int:
+        """The pixels (rows of 3 values) in all."""
+        return int(np.prod(self.od.shape[:-1]))
+
     def run(
         self, fn: Callable[..., Result], *, index: bool = False, keep_mask: bool = False
     ) -> Result:
@@ -214,6 +219,9 @@ def _pass_fn(families: list[Family], requests: list[tuple[str, int, Any, float, 
             v = _select(vals[fam], path)
             if kind == "hist":
                 out[f"sum:{j}"] = np.bincount(_bin(v, lo, scale), minlength=BINS)
+                if path:  # a bin histogrammed again: its values may all be one
+                    out[f"min:{j}"] = v.min() if v.size else np.inf
+                    out[f"max:{j}"] = v.max() if v.size else -np.inf
             else:
                 out[f"cat:{j}"] = v
         return out
@@ -266,6 +274,9 @@ def block_quantiles(passes: BlockPasses, families: list[Family]) -> list[list[fl
                 r.value = float(vals[r.rank])
                 continue
             lo, scale = requests[j][3], requests[j][4]
+            if r.path and got[f"min:{j}"] == got[f"max:{j}"]:  # one value: no finer bins
+                r.value = float(got[f"min:{j}"])
+                continue
             cum = np.cumsum(got[f"sum:{j}"])
             b = int(np.searchsorted(cum, int(r.rank), side="right"))
             below = int(cum[b - 1]) if b > 0 else 0

@@ -37,13 +37,13 @@ from imageform._validate import (
     real_array,
 )
 from imageform.analysis._arrays import (
-    exact_quantiles,
     image_in,
     is_dask,
     read_json,
     target_source,
     write_json,
 )
+from imageform.analysis._blockpass import BlockPasses, Family, block_quantiles
 from imageform.analysis._sparse_nmf import lattice_rows, sparse_nmf
 from imageform.analysis._tissue_rules import DEFAULTS as MASK_DEFAULTS
 from imageform.analysis._tissue_rules import keep_mask, pixel_artefacts
@@ -139,35 +139,29 @@ def _glass_mode(flat: Any, cand: np.ndarray, tol: float) -> tuple[np.ndarray, fl
     """
     lo, hi = cand * np.exp(-tol), cand * np.exp(tol)
     parts: list[Any]
-    if is_dask(flat):
-        near = ((flat >= lo) & (flat <= hi)).all(axis=1)
-    else:  # channel by channel (a reduction over a last axis of 3 is slow): the same pixels
-        near = (flat[:, 0] >= lo[0]) & (flat[:, 0] <= hi[0])
-        for c in (1, 2):
-            near &= (flat[:, c] >= lo[c]) & (flat[:, c] <= hi[c])
-    if is_dask(flat):
-        import dask
-        import dask.array as da
 
-        w = near.astype(np.float64)
-        parts = [w.sum()]
-        for c in range(3):
-            v = flat[:, c].astype(np.float64)
-            idx = (v * 255.0 + 0.5).astype(np.int64).clip(0, 255)
-            parts += [
-                da.bincount(idx, weights=w, minlength=256),
-                da.bincount(idx, weights=w * v, minlength=256),
-            ]
-        parts = list(dask.compute(*parts))
-    else:
-        sel = np.asarray(flat)[near]
-        parts = [sel.shape[0]]
+    def histograms(arr: np.ndarray) -> list[Any]:
+        # channel by channel (a reduction over a last axis of 3 is slow): the same pixels
+        near = (arr[:, 0] >= lo[0]) & (arr[:, 0] <= hi[0])
+        for c in (1, 2):
+            near &= (arr[:, c] >= lo[c]) & (arr[:, c] <= hi[c])
+        sel = arr[near]
+        out = [np.array(sel.shape[0])]
         for c in range(3):
             v = sel[:, c].astype(np.float64)
             idx = np.clip((v * 255.0 + 0.5).astype(np.int64), 0, 255)
-            parts += [np.bincount(idx, minlength=256), np.bincount(idx, weights=v, minlength=256)]
+            out += [np.bincount(idx, minlength=256), np.bincount(idx, weights=v, minlength=256)]
+        return out
+
+    if isinstance(flat, BlockPasses):  # Dask: one task per block
+        got = flat.run(lambda a, u, i: {f"sum:{k}": h for k, h in enumerate(histograms(a))})
+        parts = [got[f"sum:{k}"] for k in range(7)]
+        rows = flat.rows
+    else:
+        parts = histograms(np.asarray(flat))
+        rows = int(flat.shape[0])
     count = float(parts[0])
-    share = count / max(int(flat.shape[0]), 1)
+    share = count / max(rows, 1)
     if count == 0.0:
         return np.asarray(cand, dtype=np.float64), 0.0
     mode = np.empty(3)
@@ -247,7 +241,8 @@ def estimate_background(
     Parameters
     ----------
     image : array_like, shape (..., 3)
-        Encoded RGB (uint8/uint16/floats in [0, 1]) or Dask (exact two-pass quantiles).
+        Encoded RGB (uint8/uint16/floats in [0, 1]) or Dask (block-wise passes, exact
+        percentiles: the same I0).
     percentile : float
         Percentile of each channel taken as the candidate (99: at least 1 % glass).
     min_background : float
@@ -290,11 +285,16 @@ def estimate_background(
         )
     max_tint = as_real(max_tint, "max_tint", minimum=0.0, maximum=1.0)
     min_glass = as_real(min_glass, "min_glass", minimum=0.0, maximum=1.0)
-    flat = rgb.reshape((-1, 3))
-    if is_dask(flat):
-        i0 = np.array(
-            exact_quantiles([(flat[:, c].astype(np.float64), float(percentile)) for c in range(3)])
-        )
+    flat: Any = rgb.reshape((-1, 3))
+    if is_dask(flat):  # block-wise passes (the percentiles: a histogram over [0, 1], a gather)
+        flat = BlockPasses(rgb)
+
+        def channel(c: int) -> Any:
+            return lambda a, u: a[:, c]
+
+        q = (float(percentile),)
+        fams = [Family(f"c{c}", channel(c), flat.rows, 0.0, 1.0, q) for c in range(3)]
+        i0 = np.array([row[0] for row in block_quantiles(flat, fams)])
     else:  # channel by channel, as float64 (a contiguous copy partitions faster): the same
         arr = np.asarray(flat)
         i0 = np.array([np.percentile(arr[:, c].astype(np.float64), percentile) for c in range(3)])
@@ -341,7 +341,8 @@ def background_intensity(
     Parameters
     ----------
     image : array_like, shape (..., 3)
-        Encoded RGB (uint8/uint16/floats in [0, 1]) or Dask (exact two-pass quantiles).
+        Encoded RGB (uint8/uint16/floats in [0, 1]) or Dask (block-wise passes, exact
+        percentiles: the same I0).
     percentile, min_background, max_tint, min_glass
         As in :func:`estimate_background`.
 
@@ -739,8 +740,6 @@ class _LazyFit:
     def __init__(
         self, od: Any, use: Any, beta: float, rule: str, base: str, *, tissue: bool = False
     ) -> None:
-        from imageform.analysis._blockpass import BlockPasses
-
         self.beta, self.rule = beta, rule
         self.tol = _GLASS_TOLERANCE / (_LN10 if base == "10" else 1.0)
         shape = tuple(od.shape[:-1])
@@ -786,8 +785,6 @@ class _LazyFit:
 
     def stains(self, alpha: float, min_pixels: int, what: str) -> tuple[np.ndarray, int]:
         """:func:`_fit`'s stain matrix and kept-pixel count."""
-        from imageform.analysis._blockpass import Family, block_quantiles
-
         n = _enough(self.n, self.lost, self.beta, min_pixels, self.rule, what)
         plane = _plane(n, np.asarray(self.s1), self.s2)
 
@@ -801,8 +798,6 @@ class _LazyFit:
 
     def max_conc(self, stains: np.ndarray, percentile: float) -> np.ndarray:
         """:func:`_max_conc`: each stain's percentile over the pixels that are not glass."""
-        from imageform.analysis._blockpass import Family, block_quantiles
-
         pinv = np.linalg.pinv(stains)
         every = self.n_tissue == 0  # no pixel off the glass: all of them (as in memory)
         n = int(np.prod(self.blocks.od.shape[:-1])) if every else self.n_tissue
