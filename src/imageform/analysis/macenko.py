@@ -37,13 +37,13 @@ from imageform._validate import (
     real_array,
 )
 from imageform.analysis._arrays import (
-    exact_quantiles,
     image_in,
     is_dask,
     read_json,
     target_source,
     write_json,
 )
+from imageform.analysis._blockpass import BlockPasses, Family, block_quantiles
 from imageform.analysis._sparse_nmf import lattice_rows, sparse_nmf
 from imageform.analysis._tissue_rules import DEFAULTS as MASK_DEFAULTS
 from imageform.analysis._tissue_rules import keep_mask, pixel_artefacts
@@ -139,35 +139,29 @@ def _glass_mode(flat: Any, cand: np.ndarray, tol: float) -> tuple[np.ndarray, fl
     """
     lo, hi = cand * np.exp(-tol), cand * np.exp(tol)
     parts: list[Any]
-    if is_dask(flat):
-        near = ((flat >= lo) & (flat <= hi)).all(axis=1)
-    else:  # channel by channel (a reduction over a last axis of 3 is slow): the same pixels
-        near = (flat[:, 0] >= lo[0]) & (flat[:, 0] <= hi[0])
-        for c in (1, 2):
-            near &= (flat[:, c] >= lo[c]) & (flat[:, c] <= hi[c])
-    if is_dask(flat):
-        import dask
-        import dask.array as da
 
-        w = near.astype(np.float64)
-        parts = [w.sum()]
-        for c in range(3):
-            v = flat[:, c].astype(np.float64)
-            idx = (v * 255.0 + 0.5).astype(np.int64).clip(0, 255)
-            parts += [
-                da.bincount(idx, weights=w, minlength=256),
-                da.bincount(idx, weights=w * v, minlength=256),
-            ]
-        parts = list(dask.compute(*parts))
-    else:
-        sel = np.asarray(flat)[near]
-        parts = [sel.shape[0]]
+    def histograms(arr: np.ndarray) -> list[Any]:
+        # channel by channel (a reduction over a last axis of 3 is slow): the same pixels
+        near = (arr[:, 0] >= lo[0]) & (arr[:, 0] <= hi[0])
+        for c in (1, 2):
+            near &= (arr[:, c] >= lo[c]) & (arr[:, c] <= hi[c])
+        sel = arr[near]
+        out = [np.array(sel.shape[0])]
         for c in range(3):
             v = sel[:, c].astype(np.float64)
             idx = np.clip((v * 255.0 + 0.5).astype(np.int64), 0, 255)
-            parts += [np.bincount(idx, minlength=256), np.bincount(idx, weights=v, minlength=256)]
+            out += [np.bincount(idx, minlength=256), np.bincount(idx, weights=v, minlength=256)]
+        return out
+
+    if isinstance(flat, BlockPasses):  # Dask: one task per block
+        got = flat.run(lambda a, u, i: {f"sum:{k}": h for k, h in enumerate(histograms(a))})
+        parts = [got[f"sum:{k}"] for k in range(7)]
+        rows = flat.rows
+    else:
+        parts = histograms(np.asarray(flat))
+        rows = int(flat.shape[0])
     count = float(parts[0])
-    share = count / max(int(flat.shape[0]), 1)
+    share = count / max(rows, 1)
     if count == 0.0:
         return np.asarray(cand, dtype=np.float64), 0.0
     mode = np.empty(3)
@@ -247,7 +241,8 @@ def estimate_background(
     Parameters
     ----------
     image : array_like, shape (..., 3)
-        Encoded RGB (uint8/uint16/floats in [0, 1]) or Dask (exact two-pass quantiles).
+        Encoded RGB (uint8/uint16/floats in [0, 1]) or Dask (block-wise passes, exact
+        percentiles: the same I0).
     percentile : float
         Percentile of each channel taken as the candidate (99: at least 1 % glass).
     min_background : float
@@ -290,11 +285,16 @@ def estimate_background(
         )
     max_tint = as_real(max_tint, "max_tint", minimum=0.0, maximum=1.0)
     min_glass = as_real(min_glass, "min_glass", minimum=0.0, maximum=1.0)
-    flat = rgb.reshape((-1, 3))
-    if is_dask(flat):
-        i0 = np.array(
-            exact_quantiles([(flat[:, c].astype(np.float64), float(percentile)) for c in range(3)])
-        )
+    flat: Any = rgb.reshape((-1, 3))
+    if is_dask(flat):  # block-wise passes (the percentiles: a histogram over [0, 1], a gather)
+        flat = BlockPasses(rgb)
+
+        def channel(c: int) -> Any:
+            return lambda a, u: a[:, c]
+
+        q = (float(percentile),)
+        fams = [Family(f"c{c}", channel(c), flat.rows, 0.0, 1.0, q) for c in range(3)]
+        i0 = np.array([row[0] for row in block_quantiles(flat, fams)])
     else:  # channel by channel, as float64 (a contiguous copy partitions faster): the same
         arr = np.asarray(flat)
         i0 = np.array([np.percentile(arr[:, c].astype(np.float64), percentile) for c in range(3)])
@@ -341,7 +341,8 @@ def background_intensity(
     Parameters
     ----------
     image : array_like, shape (..., 3)
-        Encoded RGB (uint8/uint16/floats in [0, 1]) or Dask (exact two-pass quantiles).
+        Encoded RGB (uint8/uint16/floats in [0, 1]) or Dask (block-wise passes, exact
+        percentiles: the same I0).
     percentile, min_background, max_tint, min_glass
         As in :func:`estimate_background`.
 
@@ -621,7 +622,11 @@ def _count(keep: Any, beta: float, min_pixels: int, rule: str, what: str, use: A
         import dask
 
         n, lost = dask.compute(n, lost)
-    n = int(n)
+    return _enough(int(n), int(lost), beta, min_pixels, rule, what)
+
+
+def _enough(n: int, lost: int, beta: float, min_pixels: int, rule: str, what: str) -> int:
+    """``n``, or the refusal of a fit with fewer than ``min_pixels`` kept pixels."""
     if n < min_pixels:
         why = "is there tissue in the image?"
         if int(lost):
@@ -645,7 +650,7 @@ def _fit(
     what: str = "Macenko",
     use: Any = None,
 ) -> tuple[np.ndarray, int]:
-    """Stain matrix (2, 3) from OD pixels, NumPy or Dask (same formulas, same order).
+    """Stain matrix (2, 3) from OD pixels in memory (Dask: :class:`_LazyFit`, same formulas).
 
     ``use``: flat booleans, the pixels a tissue mask keeps (None: all).
     """
@@ -655,15 +660,18 @@ def _fit(
         keep = keep & use
     w = keep.astype(np.float64)
     n = _count(keep, beta, min_pixels, rule, what, use)
-    lazy = is_dask(flat)
-    # covariance of the kept OD vectors as sums (a reduction in Dask), then its eigenvectors
+    # covariance of the kept OD vectors as sums, then its eigenvectors
     s1 = (flat * w[:, None]).sum(axis=0)
     s2 = [(flat[:, i] * flat[:, j] * w).sum() for i in range(3) for j in range(i, 3)]
-    if lazy:
-        import dask
+    plane = _plane(n, np.asarray(s1), s2)
+    proj = flat @ plane
+    phi = np.arctan2(proj[:, 1], proj[:, 0])
+    lo, hi = (float(v) for v in np.percentile(phi[keep], [alpha, 100.0 - alpha]))
+    return _extremes(plane, lo, hi, n, beta, what), n
 
-        s1, s2 = dask.compute(s1, s2)
-    s1 = np.asarray(s1)
+
+def _plane(n: int, s1: np.ndarray, s2: Any) -> np.ndarray:
+    """Return the plane (3, 2) of the covariance's two largest eigenvectors, from its sums."""
     mean = s1 / n
     m2 = np.empty((3, 3))
     k = 0
@@ -674,15 +682,11 @@ def _fit(
     cov = m2 / (n - 1)
     _, vecs = np.linalg.eigh(cov)
     plane = vecs[:, [2, 1]]  # the two largest
-    plane = plane * np.where(plane[0] < 0, -1.0, 1.0)  # point along +R (Macenko's code)
-    proj = flat @ plane
-    phi = np.arctan2(proj[:, 1], proj[:, 0])
-    if lazy:
-        phi_k = phi[keep]
-        lo, hi = exact_quantiles([(phi_k, alpha), (phi_k, 100.0 - alpha)])
-    else:
-        phi_k = phi[keep]
-        lo, hi = (float(v) for v in np.percentile(phi_k, [alpha, 100.0 - alpha]))
+    return plane * np.where(plane[0] < 0, -1.0, 1.0)  # point along +R (Macenko's code)
+
+
+def _extremes(plane: np.ndarray, lo: float, hi: float, n: int, beta: float, what: str) -> Any:
+    """Return the stain matrix (2, 3) of the extreme angles ``lo``, ``hi`` in ``plane``."""
     v_min = plane @ np.array([np.cos(lo), np.sin(lo)])
     v_max = plane @ np.array([np.cos(hi), np.sin(hi)])
     # hematoxylin first: the vector with the larger red OD component (Macenko's heuristic)
@@ -695,7 +699,7 @@ def _fit(
             "colour (the extreme directions of their OD coincide), so two stains cannot be "
             "separated; is this a tile of one flat colour (blank, black, a pen mark)?"
         )
-    return stains, n
+    return stains
 
 
 #: Pixels within this of :math:`I_0` in every channel (ln units, :func:`estimate_background`'s
@@ -718,13 +722,107 @@ def _max_conc(
     keep = (abs(flat) > tol).any(axis=1)
     if use is not None:
         keep = keep & use
-    if is_dask(c):
-        n = keep.sum().compute()
-        if int(n) == 0:
-            keep = keep | True
-        return np.array(exact_quantiles([(c[:, i][keep], percentile) for i in range(2)]))
     tissue = c[keep]
     return np.percentile(tissue if tissue.shape[0] else c, percentile, axis=0)
+
+
+class _LazyFit:
+    """A stain fit on Dask: :func:`_fit` and :func:`_max_conc` in block-wise passes.
+
+    Each pass is one task per block of the OD (:mod:`._blockpass`) computing every statistic
+    the step needs at once; the first keeps the tissue mask of each block (packed), so the
+    mask's ``map_overlap`` runs once per fit, not once per reduction. Five passes (the
+    covariance sums with the counts and the OD's range; a histogram and a gather for the
+    two angles; the same for the two concentrations) where the Dask expressions took nine
+    computations of the whole graph. The percentiles are exact (NumPy's).
+    """
+
+    def __init__(
+        self, od: Any, use: Any, beta: float, rule: str, base: str, *, tissue: bool = False
+    ) -> None:
+        self.beta, self.rule = beta, rule
+        self.tol = _GLASS_TOLERANCE / (_LN10 if base == "10" else 1.0)
+        shape = tuple(od.shape[:-1])
+        if use is not None and not is_dask(use):
+            import dask.array as da
+
+            use = da.from_array(np.asarray(use).reshape(shape), chunks=od.chunks[:-1])
+        self.blocks = BlockPasses(od, None if use is None else use.reshape(shape))
+
+        def stats(flat: np.ndarray, u: Any, index: Any) -> dict[str, Any]:
+            keep = self._keep(flat, u)
+            w = keep.astype(np.float64)
+            glass = self._tissue(flat, u)
+            out = {
+                "sum:n": np.array([w.sum(), 0.0 if u is None else (~u).sum(), glass.sum()]),
+                "sum:s1": (flat * w[:, None]).sum(axis=0),
+                "sum:s2": np.array(
+                    [(flat[:, i] * flat[:, j] * w).sum() for i in range(3) for j in range(i, 3)]
+                ),
+                "min:od": np.stack([_ends(flat[glass], np.min), _ends(flat, np.min)]),
+                "max:od": np.stack([_ends(flat[glass], np.max), _ends(flat, np.max)]),
+            }
+            if tissue:  # the kept pixels themselves, with their flat positions
+                out["cat:tissue"] = flat[keep]
+                out["cat:index"] = index[keep]
+            return out
+
+        got = self.blocks.run(stats, index=tissue, keep_mask=True)
+        self.n, self.lost, self.n_tissue = (int(v) for v in got["sum:n"])
+        self.s1, self.s2 = got["sum:s1"], got["sum:s2"]
+        self.od_min, self.od_max = got["min:od"], got["max:od"]
+        if tissue:
+            order = np.argsort(got["cat:index"], kind="stable")
+            self.tissue, self.index = got["cat:tissue"][order], got["cat:index"][order]
+
+    def _keep(self, flat: np.ndarray, u: Any) -> Any:
+        keep = _keep_mask(flat, self.beta, self.rule)
+        return keep if u is None else keep & u
+
+    def _tissue(self, flat: np.ndarray, u: Any) -> Any:
+        keep = (abs(flat) > self.tol).any(axis=1)
+        return keep if u is None else keep & u
+
+    def stains(self, alpha: float, min_pixels: int, what: str) -> tuple[np.ndarray, int]:
+        """:func:`_fit`'s stain matrix and kept-pixel count."""
+        n = _enough(self.n, self.lost, self.beta, min_pixels, self.rule, what)
+        plane = _plane(n, np.asarray(self.s1), self.s2)
+
+        def angles(flat: np.ndarray, u: Any) -> np.ndarray:
+            proj = flat @ plane
+            return np.arctan2(proj[:, 1], proj[:, 0])[self._keep(flat, u)]
+
+        fam = Family("phi", angles, n, -np.pi, np.pi, (alpha, 100.0 - alpha))
+        lo, hi = block_quantiles(self.blocks, [fam])[0]
+        return _extremes(plane, lo, hi, n, self.beta, what), n
+
+    def max_conc(self, stains: np.ndarray, percentile: float) -> np.ndarray:
+        """:func:`_max_conc`: each stain's percentile over the pixels that are not glass."""
+        pinv = np.linalg.pinv(stains)
+        every = self.n_tissue == 0  # no pixel off the glass: all of them (as in memory)
+        n = int(np.prod(self.blocks.od.shape[:-1])) if every else self.n_tissue
+        lo, hi = self.od_min[1 if every else 0], self.od_max[1 if every else 0]
+        fams = []
+        for i in range(2):
+            col = pinv[:, i]
+            # the range of OD @ col over the box of the OD's range, widened by its rounding
+            a = float(np.minimum(col * lo, col * hi).sum())
+            b = float(np.maximum(col * lo, col * hi).sum())
+            pad = 1e-9 * (abs(a) + abs(b) + 1.0)
+
+            def conc(flat: np.ndarray, u: Any, i: int = i) -> np.ndarray:
+                c = flat @ pinv
+                return c[:, i] if every else c[:, i][self._tissue(flat, u)]
+
+            fams.append(Family(f"c{i}", conc, n, a - pad, b + pad, (percentile,)))
+        return np.array([row[0] for row in block_quantiles(self.blocks, fams)])
+
+
+def _ends(x: np.ndarray, fn: Any) -> np.ndarray:
+    """``fn`` (min or max) per channel of ``x`` (rows), or the identity of ``fn`` if none."""
+    if x.shape[0]:
+        return fn(x, axis=0)
+    return np.full(3, np.inf if fn is np.min else -np.inf)
 
 
 #: What ``mask=`` accepts in the stain estimators: ``"auto"`` (:func:`~imageform.analysis.
@@ -930,8 +1028,13 @@ def macenko_stains(
     od = _without_ink(
         optical_density(rgb, min_intensity=min_intensity, i0=i0v, base=key), found, key
     )
-    stains, n = _fit(od, float(beta), float(alpha), max(min_pixels, 2), rule, use=use)
-    maxc = _max_conc(od, stains, float(max_percentile), key, use)
+    if is_dask(od):
+        fit = _LazyFit(od, use, float(beta), rule, key)
+        stains, n = fit.stains(float(alpha), max(min_pixels, 2), "Macenko")
+        maxc = fit.max_conc(stains, float(max_percentile))
+    else:
+        stains, n = _fit(od, float(beta), float(alpha), max(min_pixels, 2), rule, use=use)
+        maxc = _max_conc(od, stains, float(max_percentile), key, use)
     n_total = int(np.prod(rgb.shape[:-1]))
     i0t = (float(i0v[0]), float(i0v[1]), float(i0v[2]))
     return MacenkoStains(stains, maxc, n, i0t, key, "macenko", n_total, i0_from)
@@ -1190,19 +1293,17 @@ def vahadane_stains(
     od = _without_ink(
         optical_density(rgb, min_intensity=min_intensity, i0=i0v, base=key), found, key
     )
-    flat: Any = od.reshape((-1, 3)).astype(np.float64)
-    keep = _keep_mask(flat, float(beta), "norm")
-    if use is not None:
-        keep = keep & use
-    n = _count(keep, float(beta), max(int(min_pixels), 2), "norm", "Vahadane", use)
-    h0, _ = _fit(od, float(beta), 1.0, max(int(min_pixels), 2), "norm", "Vahadane", use)
-    if is_dask(flat):
-        import dask
-        import dask.array as da
-
-        where = da.arange(flat.shape[0], chunks=flat.chunks[0])
-        tissue, index = dask.compute(flat[keep], where[keep])
+    fit = _LazyFit(od, use, float(beta), "norm", key, tissue=True) if is_dask(od) else None
+    if fit is not None:  # the tissue pixels gathered with the first pass's sums
+        h0, n = fit.stains(1.0, max(int(min_pixels), 2), "Vahadane")
+        tissue, index = fit.tissue, fit.index
     else:
+        flat = od.reshape((-1, 3)).astype(np.float64)
+        keep = _keep_mask(flat, float(beta), "norm")
+        if use is not None:
+            keep = keep & use
+        n = _count(keep, float(beta), max(int(min_pixels), 2), "norm", "Vahadane", use)
+        h0, _ = _fit(od, float(beta), 1.0, max(int(min_pixels), 2), "norm", "Vahadane", use)
         tissue, index = flat[keep], np.flatnonzero(keep)
     x = np.asarray(tissue)[lattice_rows(np.asarray(index), max_pixels)]
     _, h, _ = sparse_nmf(x, np.maximum(h0, 0.0), float(lam), iterations)
@@ -1213,7 +1314,10 @@ def vahadane_stains(
     h = h / norms
     if h[0, 0] < h[1, 0]:
         h = h[::-1]
-    maxc = _max_conc(od, h, float(max_percentile), key, use)
+    if fit is not None:
+        maxc = fit.max_conc(h, float(max_percentile))
+    else:
+        maxc = _max_conc(od, h, float(max_percentile), key, use)
     i0t = (float(i0v[0]), float(i0v[1]), float(i0v[2]))
     n_total = int(np.prod(rgb.shape[:-1]))
     return MacenkoStains(h.copy(), maxc, n, i0t, key, "vahadane", n_total, i0_from)

@@ -306,9 +306,26 @@ def _points_in_polygon(pts: Any, poly: np.ndarray, xp: Any) -> Any:
         dev = device_of(pts)
         x, y = flat[:, 0], xp.asarray(flat[:, 1], copy=True)  # contiguous for searchsorted
         row = xp.searchsorted(xp.asarray(np.array(v), device=dev), y, side="right")
-        table = tuple(xp.asarray(np.array(t), device=dev) for t in table)
-        n = _crossings(x, y, [xp.take(t, row, axis=0) for t in table], xp)
+        # the slabs' edges a few columns at a time: (N, G) temporaries of at most
+        # _DEVICE_BLOCK values, not (N, K) ones (K = 54 for the 2° observer's xy)
+        edges = xp.asarray(_slab_edges(table), device=dev)  # (len(v) + 1, K, 4)
+        k_all = edges.shape[1]
+        step = max(1, min(k_all, _DEVICE_BLOCK // max(int(row.shape[0]), 1)))
+        n = xp.zeros(row.shape, dtype=xp.int32, device=dev)
+        for k in range(0, k_all, step):
+            got = xp.take(edges[:, k : min(k + step, k_all), :], row, axis=0)  # (N, G, 4)
+            xint = got[:, :, 0] + (y[:, None] - got[:, :, 1]) * got[:, :, 2] / got[:, :, 3]
+            n = n + xp.sum(xp.astype(x[:, None] < xint, xp.int32), axis=1)
     return xp.reshape(n, pts.shape[:-1]) % 2 == 1
+
+
+#: Values per temporary of the device path of :func:`_points_in_polygon` (points x edges).
+_DEVICE_BLOCK = 1 << 18
+
+
+def _slab_edges(table: tuple[np.ndarray, ...]) -> np.ndarray:
+    """Stack the slab tables into one (rows, K, 4) array: ``x1, y1, x2 - x1, y2 - y1`` last."""
+    return np.ascontiguousarray(np.stack(table, axis=-1))
 
 
 @chunkwise(1)
