@@ -21,8 +21,6 @@ from imageform._validate import as_image, as_path, check_nonempty, describe, for
 from imageform.errors import InvalidInputError
 
 __all__ = [
-    "exact_quantile",
-    "exact_quantiles",
     "image_in",
     "is_dask",
     "read_json",
@@ -76,70 +74,6 @@ def image_in(
     if not isinstance(image, np.ndarray) and hasattr(image, "__array_namespace__"):
         image = to_numpy(image)
     return np.asarray(as_image(image, name, channels=channels, range_check=range_check))
-
-
-def exact_quantile(values: Any, q: float, *, bins: int = 4096) -> float:
-    """Return the ``q``-th percentile (NumPy's linear interpolation) of a 1-D Dask array.
-
-    Exact, in two passes of reductions: a histogram locates the bins holding the two order
-    statistics that the linear rule interpolates between, then only the values inside
-    those bins are gathered and sorted. The result equals ``np.percentile`` on the
-    computed array (same order statistics, same interpolation).
-    """
-    return exact_quantiles([(values, q)], bins=bins)[0]
-
-
-def exact_quantiles(items: list[tuple[Any, float]], *, bins: int = 4096) -> list[float]:
-    """:func:`exact_quantile` of several ``(values, q)`` pairs, their passes computed together.
-
-    Each pass (the counts and ranges, the histograms, the values gathered from the bins) is
-    one ``dask.compute`` of all the pairs, so the graphs they share (a Macenko fit's optical
-    densities) are computed once per pass: three passes, not four per pair.
-    """
-    import dask
-    import dask.array as da
-
-    stats = dask.compute(*[(da.isfinite(v).sum(), v.min(), v.max()) for v, _ in items])
-    plans: list[Any] = []
-    for (values, q), (n, lo, hi) in zip(items, stats, strict=True):
-        n = int(n)
-        if n == 0:
-            raise InvalidInputError("cannot take a percentile of no values")
-        lo, hi = float(lo), float(hi)
-        pos = q / 100.0 * (n - 1)
-        k = int(np.floor(pos))
-        if hi == lo:
-            plans.append(lo)
-            continue
-        # one bin index expression for counting and for gathering, so the two always agree
-        idx = da.minimum(da.floor((values - lo) * (bins / (hi - lo))), bins - 1).astype(np.int64)
-        plans.append((values, idx, (k, min(k + 1, n - 1)), pos - k))
-    todo = [p for p in plans if not isinstance(p, float)]
-    counts = dask.compute(*[da.bincount(p[1], minlength=bins) for p in todo])
-    gathers: list[Any] = []
-    where: list[list[tuple[int, int]]] = []
-    for (values, idx, ranks, _), cnt in zip(todo, counts, strict=True):
-        cum = np.cumsum(np.asarray(cnt))
-        at = []
-        for r in ranks:
-            b = int(np.searchsorted(cum, r, side="right"))
-            below = int(cum[b - 1]) if b > 0 else 0
-            at.append((len(gathers), r - below))
-            gathers.append(values[idx == b])
-        where.append(at)
-    inside = [np.sort(np.asarray(g)) for g in dask.compute(*gathers)]
-    done = iter(
-        [inside[i0][j0], inside[i1][j1], frac]
-        for ((i0, j0), (i1, j1)), (_, _, _, frac) in zip(where, todo, strict=True)
-    )
-    out = []
-    for p in plans:
-        if isinstance(p, float):
-            out.append(p)
-        else:
-            a, b, frac = next(done)
-            out.append(float(a) + frac * (float(b) - float(a)))
-    return out
 
 
 def write_json(path: str | Path, payload: dict[str, Any]) -> None:
