@@ -74,8 +74,9 @@ def videos(data: Path, heldout: bool) -> list[dict[str, Any]]:
                 "dist": np.zeros(5),
             }
         ]
-    rows = np.loadtxt(data / "heldout_sksurgery" / "calibration.txt")
-    K, dist = rows[:3], rows[3]
+    text = (data / "heldout_sksurgery" / "calibration.txt").read_text().split("\n")
+    K = np.loadtxt(text[:3])  # the projection matrix, then a row of 5 distortion terms
+    dist = np.array(text[3].split(), float)
     return [
         {
             "name": f"scikit-surgeryarucotracker {v}",
