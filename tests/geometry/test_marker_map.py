@@ -358,3 +358,33 @@ def test_one_sighting_of_a_marker_per_hypothesis() -> None:
     ]
     plain = agree[:, :2]
     assert _one_each(plain, err[:, :2], np.array([0, 1])) is plain  # no id twice: as it is
+
+
+def test_a_large_frame_goes_to_the_trackers_own_buffers() -> None:
+    """A frame over 4 Mpx (the detector's per-thread buffers stop there): its float grey
+    image and the corner refinement's float32 one are written into the tracker's buffers,
+    the same arrays frame after frame, and the poses are bit for bit those of fresh arrays
+    (the tracker's step run without its buffers)."""
+    s = 4.5  # 2880 x 1620, 4.7 Mpx
+    path = _path(3)
+    frames = [
+        cv2.resize(f, None, fx=s, fy=s, interpolation=cv2.INTER_LINEAR) for f in _frames(path)
+    ]
+    k = K.copy()
+    k[:2, :2] *= s
+    k[:2, 2] = (k[:2, 2] + 0.5) * s - 0.5
+    lent = MarkerMapTracker(GRID, k, predict=False)
+    fresh = MarkerMapTracker(GRID, k, predict=False)
+    where = None
+    for (R, _), f in zip(path, frames, strict=True):
+        a, b = lent.update(f), fresh._update(f)
+        assert a.found and b.found and _angle(a.R, R) < 1.0
+        assert np.array_equal(a.R, b.R) and np.array_equal(a.tvec, b.tvec)
+        now = {name: buf.ctypes.data for name, buf in lent._work.buffers.items()}
+        assert {"grey", "grey32"} <= set(now) and (where is None or now == where)
+        where = now
+    assert not fresh._work.buffers
+    one = MarkerTracker(0, 30.0, k, dictionary="4x4_50", predict=False)
+    for f in frames:
+        assert one.update(f).found
+    assert {"grey", "grey32"} <= set(one._work.buffers)

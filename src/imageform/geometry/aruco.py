@@ -33,9 +33,11 @@ Recognition 47(6):2280-2292, 2014.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import threading
 import weakref
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
@@ -276,23 +278,28 @@ def _gray01(image: object, *, scratch: bool = False) -> NDArray[np.float64]:
 
     ``scratch``: a uint8 grey image of up to ``_MAX_KEPT`` pixels is converted into this
     thread's work buffer (valid until the next such call in the thread: for a detection
-    that does not hand the grey image back), sparing a fresh array's page faults.
+    that does not hand the grey image back), sparing a fresh array's page faults; a larger
+    one into the buffer of the tracker whose frame this is (:func:`_working`), when one is.
     """
     if isinstance(image, np.ndarray) and _MADE.get(id(image)) is image:
         return image
+    area = getattr(_WORK, "area", None)
     if (
         scratch
         and isinstance(image, np.ndarray)
         and image.dtype == np.uint8
         and image.ndim == 2
         and min(image.shape) >= 8
-        and image.size <= _MAX_KEPT
+        and (image.size <= _MAX_KEPT or (area is not None and image.size <= _MAX_PIXELS))
     ):
-        buf = getattr(_WORK, "grey", None)
-        if buf is None or buf.size < image.size:
-            buf = np.empty(max(image.size, 1 << 20))
-            _WORK.grey = buf
-        g = buf[: image.size].reshape(image.shape)
+        if image.size > _MAX_KEPT and area is not None:
+            g = area.take("grey", image.size, np.float64).reshape(image.shape)
+        else:
+            buf = getattr(_WORK, "grey", None)
+            if buf is None or buf.size < image.size:
+                buf = np.empty(max(image.size, 1 << 20))
+                _WORK.grey = buf
+            g = buf[: image.size].reshape(image.shape)
         from imageform._backend import use_numba
 
         if use_numba(image):
@@ -769,6 +776,62 @@ _WORK = threading.local()
 _MAX_KEPT = 4_000_000
 
 
+class _WorkArea:
+    """A tracker's work buffers for frames larger than ``_MAX_KEPT`` pixels, kept by name.
+
+    A 12 Mpx frame's float grey image is 100 MB: a fresh one each frame costs its page
+    faults (tens of milliseconds, the system zeroing it) more than the values written into
+    it. A tracker owns one area (freed with it) and lends it to the detector for the length
+    of a frame (:func:`_working`); a buffer is valid until the next frame. One thread at a
+    time may use an area (as a tracker's own state: a tracker follows one video).
+    """
+
+    __slots__ = ("buffers",)
+
+    def __init__(self) -> None:
+        self.buffers: dict[str, NDArray[Any]] = {}
+
+    def take(self, name: str, size: int, dtype: Any) -> NDArray[Any]:
+        """Return the buffer ``name`` as ``size`` entries of ``dtype`` (1-D; reused, grown)."""
+        buf = self.buffers.get(name)
+        if buf is None or buf.dtype != dtype or buf.size < size:
+            buf = np.empty(size, dtype=dtype)
+            self.buffers[name] = buf
+        return buf[:size]
+
+
+def _grey32(image: object) -> NDArray[np.float32] | None:
+    """Return a uint8 grey ``image`` as :func:`refine_corners` reads it, in a lent buffer.
+
+    ``float32(code) / 255`` (``as_image``'s values, the same numbers) into the buffer of the
+    tracker whose frame this is (:func:`_working`); None without one, or for another image
+    (the caller then converts as usual).
+    """
+    area = getattr(_WORK, "area", None)
+    if (
+        area is None
+        or not isinstance(image, np.ndarray)
+        or image.dtype != np.uint8
+        or image.ndim != 2
+        or min(image.shape) < 16
+    ):
+        return None
+    out = area.take("grey32", image.size, np.float32).reshape(image.shape)
+    np.true_divide(image, np.float32(255.0), out=out, dtype=np.float32)
+    return out
+
+
+@contextlib.contextmanager
+def _working(area: _WorkArea) -> Iterator[None]:
+    """Lend ``area`` to this thread's detections (:func:`_gray01`, :func:`_table`) meanwhile."""
+    before = getattr(_WORK, "area", None)
+    _WORK.area = area
+    try:
+        yield
+    finally:
+        _WORK.area = before
+
+
 def _table(g: NDArray[np.float64] | NDArray[np.uint8], pad: int) -> NDArray[Any]:
     """Return :func:`imageform._kernels.aruco.box_integral` of ``g``, in a work buffer.
 
@@ -782,7 +845,10 @@ def _table(g: NDArray[np.float64] | NDArray[np.uint8], pad: int) -> NDArray[Any]
     size = shape[0] * shape[1]
     dtype = np.int32 if g.dtype == np.uint8 else np.float64
     key = "table32" if dtype == np.int32 else "table"
-    if size > _MAX_KEPT:
+    area = getattr(_WORK, "area", None)
+    if size > _MAX_KEPT and area is not None:
+        out = area.take(key, size, dtype).reshape(shape)
+    elif size > _MAX_KEPT:
         out = np.empty(shape, dtype=dtype)
     else:
         buf = getattr(_WORK, key, None)

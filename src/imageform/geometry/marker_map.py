@@ -32,11 +32,15 @@ from imageform._validate import as_int, as_real, describe
 from imageform.errors import InvalidInputError
 from imageform.geometry.distortion import BrownConrady, DivisionModel, KannalaBrandt
 from imageform.geometry.marker_tracking import (
-    _AMBIGUITY_PX,
-    _AMBIGUITY_RATIO,
+    _PRIOR_FRAMES,
+    _PRIOR_GATE,
+    _PRIOR_MARGIN,
     _angle,
     _cross2,
     _ippe_pair,
+    _pick,
+    _Prior,
+    _prior_costs,
     _refine_marker_corners,
     marker_points,
 )
@@ -296,22 +300,27 @@ class MarkerMapTracker:
        :math:`t = t_m - R\,t_i` (:attr:`MarkerMap.marker_poses`); under each, a marker
        *agrees* when its four corners reproject within :math:`\max(3,\ 0.2\,s_{px})`
        pixels (:math:`s_{px}` its side in the image). The hypothesis with most agreeing
-       markers wins (ties: nearer the previous frame's pose, then the smaller error). On a
-       first frame (or after a lost one) whose best-supported hypotheses take different
-       sightings of a marker read twice (the only marker of the map in view, read in two
-       places; two copies of the object), nothing in the frame tells which is the object:
-       the pose is missing with ``searched = "ambiguous"`` and every sighting's corners in
-       ``image_points`` (the tracker does not guess; a later frame with more of the map in
-       view, or one copy only, settles it). A misread marker among others of the map is no
-       such case: only its true sighting agrees with them;
+       markers wins (ties: the smaller error over them). When the best-supported
+       hypotheses take different sightings of a marker read twice (the only marker of the
+       map in view, read in two places; two copies of the object), nothing in the frame
+       tells which is the object: the one nearer the last pose found (rotation and
+       translation, the motion prior of :class:`MarkerTracker`) is taken when it is
+       clearly nearer; on a first frame, or when none is, the pose is missing with
+       ``searched = "ambiguous"`` and every sighting's corners in ``image_points`` (the
+       tracker does not guess; a later frame with more of the map in view, or one copy
+       only, settles it). A misread marker among others of the map is no such case: only
+       its true sighting agrees with them;
     3. the pose is refined by Levenberg-Marquardt on the reprojection error of all
        agreeing markers' corners jointly (undistorted), the markers then farther than
        :math:`\max(2,\ 0.1\,s_{px})` pixels are dropped and the pose refined again;
     4. the best hypothesis of the other tilt (more than 5 degrees away: the mirror of a
-       marker's IPPE pair) is refined on the same corners; when it fits about as well
-       (:class:`MarkerTracker`'s rule: RMS within :math:`4\,\mathrm{rms}_1 + 1` pixels)
-       the one nearer the previous frame's rotation is kept. With one marker this is
-       :class:`MarkerTracker`'s choice exactly.
+       marker's IPPE pair) is refined on the same corners, and :class:`MarkerTracker`'s
+       rules choose: the better fit when the other's RMS exceeds
+       :math:`4\,\mathrm{rms}_1 + 1` pixels, else the one nearer the last pose (rotation
+       and translation, the prior widening with the frames since), else the better fit
+       when the fits differ beyond the noise, else none (``searched = "ambiguous"``: both
+       tilts fit and nothing tells them apart, a first frame of a map seen nearly
+       face-on). With one marker this is :class:`MarkerTracker`'s choice exactly.
 
     Parameters
     ----------
@@ -327,7 +336,8 @@ class MarkerMapTracker:
     predict : bool, keyword-only
         Search the previous frame's box before the whole frame.
     continuity : bool, keyword-only
-        Settle the mirror-tilt ambiguity by continuity (otherwise the better fit).
+        Settle the mirror-tilt ambiguity by continuity, refusing when nothing separates the
+        two tilts (otherwise the better fit, never refused).
     min_markers : int, keyword-only
         Fewest agreeing markers for a pose.
     redetect : int, keyword-only
@@ -377,11 +387,17 @@ class MarkerMapTracker:
         self._Rm, self._tm = marker_map.marker_poses
         self._box: tuple[int, int, int, int] | None = None
         self._last: BoardPose | None = None
+        self._prior: _Prior | None = None
         self._since_frame = 0
+        from imageform.geometry.aruco import _WorkArea
+
+        #: the work buffers of a frame larger than the detector keeps for every thread
+        self._work = _WorkArea()
 
     def reset(self) -> None:
         """Forget the previous frames (a cut in the video)."""
         self._box = self._last = None
+        self._prior = None
         self._since_frame = 0
 
     # -- detection ------------------------------------------------------------------------
@@ -479,14 +495,23 @@ class MarkerMapTracker:
             agree = _one_each((err < loose) | own, err, which)
         count = agree.sum(axis=1)
         total = np.where(agree, err, 0.0).sum(axis=1)
-        near = np.zeros(len(Rh))
-        last = self._last
-        if last is not None and last.found:
-            near = np.array([_angle(R, last.R) for R in R_all])
-        best = int(np.lexsort((total, near, -count))[0])
-        first = last is None or not last.found
-        if first and _rival_sightings(agree[count == count[best]], which):
-            return "ambiguous"  # no previous frame to choose between the sightings by
+        # the most agreeing markers, then the smallest error over them
+        best = int(np.lexsort((total, -count))[0])
+        top = np.flatnonzero(count == count[best])
+        if _rival_sightings(agree[top], which):
+            # as well supported, on different sightings of a marker: the sightings told
+            # apart by the last pose (rotation and translation), or not at all
+            prior = self._prior if self.continuity else None
+            if prior is None or prior.gap > _PRIOR_FRAMES:
+                return "ambiguous"
+            cost = _prior_costs(R_all[top], t_all[top], prior)
+            near = int(np.argmin(cost))
+            rivals = np.array(
+                [_rival_sightings(agree[[top[near], h]], which) for h in top], np.bool_
+            )
+            if cost[near] > _PRIOR_GATE or np.any(cost[rivals] - cost[near] < _PRIOR_MARGIN):
+                return "ambiguous"
+            best = int(top[near])
         # the other tilt: the best hypothesis more than 5 degrees from the winner (with one
         # marker, its IPPE mirror)
         far = np.array([_angle(R, R_all[best]) > np.radians(5.0) for R in R_all])
@@ -512,7 +537,10 @@ class MarkerMapTracker:
             if not np.any(keep) or np.array_equal(keep, inl):
                 break
             inl = keep
-        i = self._choose(rms, R1)
+        pick = _pick(rms, R1, t1, 4 * int(inl.sum()), self._prior, self.continuity)
+        if pick is None:
+            return "ambiguous"  # both tilts fit and no recent pose tells them apart
+        i = pick
         if int(used.sum()) < self.min_markers or not np.isfinite(rms[i]):
             return None
         e = self._errors(R1[i : i + 1], t1[i : i + 1], X[used], ideal[used])[0]
@@ -520,26 +548,16 @@ class MarkerMapTracker:
             return None
         return R1[i], t1[i], float(rms[i]), used
 
-    def _choose(self, rms: F64, R: F64) -> int:
-        """Index of the solution kept: the better fit, or by continuity when both fit."""
-        if rms.size < 2 or not np.isfinite(rms[1]):
-            return 0
-        a = int(rms[1] < rms[0])
-        b = 1 - a
-        last = self._last
-        if (
-            not self.continuity
-            or last is None
-            or not last.found
-            or rms[b] > _AMBIGUITY_RATIO * rms[a] + _AMBIGUITY_PX
-        ):
-            return a
-        return b if _angle(R[b], last.R) < _angle(R[a], last.R) else a
-
     # -- one frame ------------------------------------------------------------------------
 
     def update(self, image: ArrayLike) -> BoardPose:
         """Find the map's markers in ``image`` ((H, W) or (H, W, 3)) and solve its pose."""
+        from imageform.geometry.aruco import _working
+
+        with _working(self._work):  # this tracker's buffers for a large frame
+            return self._update(image)
+
+    def _update(self, image: ArrayLike) -> BoardPose:
         from imageform.geometry.rotations import matrix_to_rvec
 
         a = np.asarray(image)
@@ -562,6 +580,7 @@ class MarkerMapTracker:
         if got is None or isinstance(got, str):
             return self._lost(uv.reshape(-1, 2))
         R, t, rms, inl = got
+        self._prior = _Prior(R.copy(), t.copy(), 1)
         self._since_frame = 0 if searched == "frame" else self._since_frame + 1
         if self.smooth < 1.0 and self._last is not None and self._last.found:
             R, t = _blend(R, t, self._last, self.smooth)
@@ -601,4 +620,6 @@ class MarkerMapTracker:
     def _lost(self, uv: F64 | None = None) -> BoardPose:
         self._box = self._last = None
         self._since_frame = 0
+        if self._prior is not None:  # one more frame since the last pose
+            self._prior = self._prior._replace(gap=self._prior.gap + 1)
         return _missing("none", uv)

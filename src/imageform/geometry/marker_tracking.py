@@ -7,8 +7,9 @@ Its four corners give the pose by *infinitesimal plane-based pose estimation* fo
 or the mirror tilt about the line of sight. Far from face-on the wrong one reprojects
 badly; nearly face-on (and for a small marker) both fit the corners within the noise, and a
 frame-by-frame choice by reprojection error flips between them (the well-known "flip" of
-marker-based AR). :class:`MarkerTracker` keeps the solution nearer the previous frame's
-pose when the two fit about equally well.
+marker-based AR). :class:`MarkerTracker` keeps the solution nearer the last pose found
+(rotation and translation) when the two fit about equally well, and gives no pose when
+nothing separates them (a first frame nearly face-on).
 
 The marker's frame is OpenCV's (``cv2.aruco`` and ``SOLVEPNP_IPPE_SQUARE``): origin at the
 marker's centre, x to the right and y up as printed, z out of the printed side (towards a
@@ -42,6 +43,106 @@ F64 = NDArray[np.float64]
 #: continuity with the previous frame) when its reprojection RMS is at most this many times
 #: the first's plus ``_AMBIGUITY_PX`` pixels.
 _AMBIGUITY_RATIO, _AMBIGUITY_PX = 4.0, 1.0
+
+#: Two solutions are one pose (no choice to make) when their rotations are within this many
+#: degrees and their translations within this fraction of the distance.
+_SAME_DEG, _SAME_FRACTION = 5.0, 0.05
+
+#: The motion prior (:func:`_pick`): from one frame to the next a pose moves by about
+#: ``_PRIOR_DEG`` degrees and ``_PRIOR_FRACTION`` of its distance (one standard deviation
+#: each, times the square root of the frames between the two poses: a random walk). It
+#: separates two solutions when their squared normalised distances from the previous pose
+#: differ by ``_PRIOR_MARGIN`` or more (a likelihood ratio of e^0.5) and the nearer lies
+#: within ``_PRIOR_GATE`` (5 sigma).
+#: A pose found up to ``_PRIOR_FRAMES`` frames before serves as the previous pose.
+_PRIOR_DEG, _PRIOR_FRACTION = 5.0, 0.05
+_PRIOR_MARGIN, _PRIOR_GATE = 1.0, 25.0
+_PRIOR_FRAMES = 5
+
+#: The fit separates two solutions (without a previous pose) when the worse one's sum of
+#: squared corner errors exceeds the better one's by ``_FIT_CHI2`` times the corners' noise
+#: variance (a likelihood-ratio test at 3 sigma), the noise estimated from the better fit's
+#: residuals (6 parameters fitted) and taken as at least ``_NOISE_PX`` pixels a coordinate.
+_FIT_CHI2, _NOISE_PX = 9.0, 0.05
+
+
+class _Prior(NamedTuple):
+    """The last pose found and how many frames ago (1: the previous frame)."""
+
+    R: NDArray[np.float64]
+    t: NDArray[np.float64]
+    gap: int
+
+
+def _prior_costs(R: NDArray[np.float64], t: NDArray[np.float64], prior: _Prior) -> F64:
+    r"""Each pose's (``R (h, 3, 3)``, ``t (h, 3)``) squared normalised distance from ``prior``.
+
+    :math:`(\angle(R_i R_p^\top) / (5^\circ \sqrt g))^2 + (\lVert t_i - t_p \rVert /
+    (0.05 \sqrt g\,\lVert t_p \rVert))^2`, :math:`g` the frames since the prior (h,): a
+    random walk, the variance growing with the interval.
+    """
+    g = np.sqrt(prior.gap)  # a random walk: the variance grows with the interval
+    sr = np.radians(_PRIOR_DEG) * g
+    st = _PRIOR_FRACTION * g * max(float(np.linalg.norm(prior.t)), 1e-300)
+    return np.array(
+        [
+            (_angle(Ri, prior.R) / sr) ** 2 + (float(np.linalg.norm(ti - prior.t)) / st) ** 2
+            for Ri, ti in zip(R, t, strict=True)
+        ],
+        np.float64,
+    )
+
+
+def _pick(
+    rms: NDArray[np.float64],
+    R: NDArray[np.float64],
+    t: NDArray[np.float64],
+    n_points: int,
+    prior: _Prior | None,
+    continuity: bool,
+) -> int | None:
+    r"""Choose between two poses (``R (2, 3, 3)``, ``t (2, 3)``) fitted to the same corners.
+
+    ``rms (2,)``: their reprojection RMS over the same ``n_points`` corners. In order:
+
+    1. one pose (rotations within 5 degrees, translations within 5 % of the distance): the
+       better fit;
+    2. the better fit when the other's RMS exceeds :math:`4\,\mathrm{rms}_a + 1` pixels;
+    3. with ``continuity`` and a previous pose found :math:`g` frames before (``prior``,
+       :math:`g \le 5`): each pose's squared distance from it,
+       :math:`c_i = (\angle(R_i R_p^\top) / (5^\circ \sqrt g))^2 +
+       (\lVert t_i - t_p \rVert / (0.05 \sqrt g\,\lVert t_p \rVert))^2` (rotation and
+       translation; a random walk, the variance growing with the interval); the nearer when
+       :math:`c_{far} - c_{near} \ge 1` and :math:`c_{near} \le 25`;
+    4. the better fit when the fits differ beyond the noise (a likelihood-ratio test at 3
+       sigma), :math:`n\,(\mathrm{rms}_b^2 - \mathrm{rms}_a^2) \ge 9\,\sigma^2`, the
+       corners' noise variance a coordinate
+       :math:`\sigma^2 = \max(n\,\mathrm{rms}_a^2 / (2n - 6),\ 0.05^2)` (the better
+       fit's residuals, 6 parameters fitted);
+    5. otherwise nothing separates them: None (ambiguous), or the better fit without
+       ``continuity``.
+    """
+    if rms.size < 2 or not np.isfinite(rms[1]):
+        return 0
+    a = int(rms[1] < rms[0])
+    b = 1 - a
+    dist = max(float(np.linalg.norm(t[a])), 1e-300)
+    if (
+        _angle(R[0], R[1]) <= np.radians(_SAME_DEG)
+        and float(np.linalg.norm(t[0] - t[1])) <= _SAME_FRACTION * dist
+    ):
+        return a
+    if rms[b] > _AMBIGUITY_RATIO * rms[a] + _AMBIGUITY_PX:
+        return a
+    if continuity and prior is not None and prior.gap <= _PRIOR_FRAMES:
+        cost = _prior_costs(R, t, prior)
+        near = int(cost[1] < cost[0])
+        if cost[near] <= _PRIOR_GATE and cost[1 - near] - cost[near] >= _PRIOR_MARGIN:
+            return near
+    var = max(n_points * float(rms[a]) ** 2 / max(2 * n_points - 6, 1), _NOISE_PX**2)
+    if n_points * (float(rms[b]) ** 2 - float(rms[a]) ** 2) >= _FIT_CHI2 * var:
+        return a
+    return a if not continuity else None
 
 
 class SquarePoses(NamedTuple):
@@ -292,9 +393,11 @@ def _refine_marker_corners(image: np.ndarray, uv: F64, marker_size: int) -> F64:
     marker's cells (``marker_size`` bits and a border cell each side), which sees the
     border's outer corner and none of its bits. A corner that does not converge, or moves
     more than a third of a cell, keeps the detector's. Markers whose windows are the same
-    size are refined in one call (the image converted once).
+    size are refined in one call; a uint8 grey frame is converted once, into the tracker's
+    buffer when it lends one (:func:`imageform.geometry.aruco._grey32`).
     """
-    from imageform.geometry.checkerboard_subpix import refine_corners
+    from imageform.geometry.aruco import _grey32
+    from imageform.geometry.checkerboard_subpix import refine, refine_corners
 
     one = uv.ndim == 2
     quads = uv[None] if one else uv
@@ -303,16 +406,22 @@ def _refine_marker_corners(image: np.ndarray, uv: F64, marker_size: int) -> F64:
     cell = sides.mean(axis=1) / (marker_size + 2)
     hw = np.clip(np.round(cell / 2), 2, 10).astype(int)
     h, w = image.shape[:2]
+    grey = _grey32(image) if np.any(cell >= 4) else None
     for size in np.unique(hw[cell >= 4]):
         group = np.flatnonzero((hw == size) & (cell >= 4))
         pts = quads[group].reshape(-1, 2)
         inside = np.all((pts >= size + 1) & (pts <= [w - size - 2, h - size - 2]), axis=1)
         if not np.any(inside):
             continue
-        res = refine_corners(image, pts[inside], half_window=int(size))
-        got = np.asarray(res.corners, np.float64)
+        if grey is None:
+            res = refine_corners(image, pts[inside], half_window=int(size))
+            got, status = np.asarray(res.corners, np.float64), np.asarray(res.status)
+        else:  # refine_corners' own steps on its own grey values, in the tracker's buffer
+            got, status = refine(
+                grey, np.ascontiguousarray(pts[inside]), int(size), int(size), 30, 1e-3
+            )
         limit = np.repeat(cell[group], 4)[inside] / 3
-        ok = np.isin(np.asarray(res.status), (0, 1)) & np.all(np.isfinite(got), axis=1)
+        ok = np.isin(status, (0, 1)) & np.all(np.isfinite(got), axis=1)
         ok &= np.linalg.norm(got - pts[inside], axis=1) < limit
         new = pts.copy()
         new[np.flatnonzero(inside)[ok]] = got[ok]
@@ -332,9 +441,16 @@ class MarkerTracker:
 
     - the better fit, when the other's reprojection RMS exceeds
       :math:`4\,\mathrm{rms}_1 + 1` pixels (the mirrored tilt clearly fits worse);
-    - otherwise (nearly face-on, the flip ambiguity), the solution whose rotation is nearer
-      the previous frame's, :math:`\min_i \angle(R_i R_{k-1}^\top)`; on a first frame (or
-      after a lost one) the better fit.
+    - otherwise (nearly face-on, the flip ambiguity), the solution nearer the last pose
+      found, in rotation and translation, with a motion prior that widens with the frames
+      since that pose (a random walk: 5 degrees and 5 % of the distance a frame, times
+      :math:`\sqrt g` after :math:`g` frames; up to 5 frames back), when it is clearly
+      nearer;
+    - otherwise the better fit when the two fits differ beyond the corners' noise (a
+      likelihood-ratio test at 3 sigma, the noise from the fit's residuals);
+    - otherwise nothing separates them (a first frame of a marker nearly face-on): the pose
+      is missing with ``searched = "ambiguous"`` and the corners in ``image_points``. With
+      ``continuity=False``, always the better fit (never refused).
 
     The marker's id read in several places (a reflection, a second print:
     ``detect_aruco_markers(..., all_sightings=True)``): the sighting whose corners are
@@ -368,7 +484,8 @@ class MarkerTracker:
     predict : bool, keyword-only
         Search the previous frame's box before the whole frame.
     continuity : bool, keyword-only
-        Choose between the two solutions by continuity (otherwise always the better fit).
+        Choose between the two solutions by continuity and refuse when nothing separates
+        them (otherwise always the better fit).
 
     Examples
     --------
@@ -408,10 +525,16 @@ class MarkerTracker:
         self._points = marker_points(self.side)
         self._box: tuple[int, int, int, int] | None = None
         self._last: BoardPose | None = None
+        self._prior: _Prior | None = None
+        from imageform.geometry.aruco import _WorkArea
+
+        #: the work buffers of a frame larger than the detector keeps for every thread
+        self._work = _WorkArea()
 
     def reset(self) -> None:
         """Forget the previous frames (a cut in the video)."""
         self._box = self._last = None
+        self._prior = None
 
     def _find(
         self, image: np.ndarray, box: tuple[int, int, int, int] | None
@@ -457,22 +580,22 @@ class MarkerTracker:
     def _refine(self, image: np.ndarray, uv: F64) -> F64:
         return _refine_marker_corners(image, uv, self.dictionary.marker_size)
 
-    def choose(self, poses: SquarePoses) -> int:
-        """Index (0 or 1) of the solution kept: by fit, or by continuity when ambiguous."""
-        r0, r1 = float(poses.rms[0]), float(poses.rms[1])
-        last = self._last
-        if (
-            not self.continuity
-            or last is None
-            or not last.found
-            or not np.isfinite(r1)
-            or r1 > _AMBIGUITY_RATIO * r0 + _AMBIGUITY_PX
-        ):
-            return 0
-        return int(_angle(poses.R[1], last.R) < _angle(poses.R[0], last.R))
+    def choose(self, poses: SquarePoses) -> int | None:
+        """Index (0 or 1) of the solution kept, None when nothing separates them.
+
+        By fit, then by nearness to the pose of the last frames (rotation and translation),
+        then by fit within the noise (the class's rules); None: ambiguous.
+        """
+        return _pick(poses.rms, poses.R, poses.tvec, 4, self._prior, self.continuity)
 
     def update(self, image: ArrayLike) -> BoardPose:
         """Find the marker in ``image`` (a frame, (H, W) or (H, W, 3)) and solve its pose."""
+        from imageform.geometry.aruco import _working
+
+        with _working(self._work):  # this tracker's buffers for a large frame
+            return self._update(image)
+
+    def _update(self, image: ArrayLike) -> BoardPose:
         a = np.asarray(image)
         if a.ndim not in (2, 3) or a.shape[0] < 8 or a.shape[1] < 8:
             raise InvalidInputError(f"expected a frame as an (H, W[, 3]) image, got {describe(a)}")
@@ -488,6 +611,7 @@ class MarkerTracker:
             searched = "frame"
             if sightings is not None:
                 self._box = self._last = None
+                self._age()
                 return _missing("ambiguous", sightings)
         if uv is None:
             return self._lost()
@@ -496,10 +620,15 @@ class MarkerTracker:
         except InvalidInputError:
             return self._lost(uv)
         i = self.choose(poses)
+        if i is None:  # both tilts fit and no recent pose tells them apart
+            self._box = self._last = None
+            self._age()
+            return _missing("ambiguous", uv)
         R, t, rms = poses.R[i], poses.tvec[i], float(poses.rms[i])
         X = self._points
         if not np.isfinite(rms) or np.any(X @ R[2] + t[2] <= 0):
             return self._lost(uv)
+        self._prior = _Prior(R.copy(), t.copy(), 1)
         if self.smooth < 1.0 and self._last is not None and self._last.found:
             R, t = _blend(R, t, self._last, self.smooth)
         from imageform.geometry.rotations import matrix_to_rvec
@@ -514,6 +643,12 @@ class MarkerTracker:
         self._last = pose
         return pose
 
+    def _age(self) -> None:
+        """One more frame since the last pose (the motion prior widens)."""
+        if self._prior is not None:
+            self._prior = self._prior._replace(gap=self._prior.gap + 1)
+
     def _lost(self, uv: F64 | None = None) -> BoardPose:
         self._box = self._last = None
+        self._age()
         return _missing("none", uv)

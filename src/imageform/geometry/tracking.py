@@ -299,6 +299,10 @@ class BoardTracker:
         #: none yet), which decide whether a ChArUco frame's markers are read reduced
         self._frame: tuple[int, int] = (0, 0)
         self._marker_px = 0.0
+        from imageform.geometry.aruco import _WorkArea
+
+        #: the work buffers of a frame larger than the detector keeps for every thread
+        self._work = _WorkArea()
 
     def reset(self) -> None:
         """Forget the previous frames (a cut in the video)."""
@@ -500,6 +504,12 @@ class BoardTracker:
 
     def update(self, image: ArrayLike) -> BoardPose:
         """Find the board in ``image`` (a frame, (H, W) or (H, W, 3)) and solve its pose."""
+        from imageform.geometry.aruco import _working
+
+        with _working(self._work):  # this tracker's buffers for a large frame
+            return self._update(image)
+
+    def _update(self, image: ArrayLike) -> BoardPose:
         from imageform.geometry.pnp import solve_pnp
         from imageform.geometry.rotations import matrix_to_rvec
 

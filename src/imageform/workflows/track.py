@@ -384,7 +384,7 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
                     label = f"frame {frame.index}" + (
                         f"  {pose.corners} corners  rms {pose.rms_px:.2f} px"
                         if pose.found
-                        else "  marker read in two places"
+                        else "  ambiguous: two poses fit, no pose"
                         if pose.searched == "ambiguous"
                         else "  board not found"
                     )
@@ -426,8 +426,10 @@ def track(run: Run, opts: TrackOptions, *, out: Path, video: str) -> Result:
         run.note(f"note: the board was found in none of the {n} frames (check --board)")
     if ambiguous:
         run.note(
-            f"note: {ambiguous} of the {n} frames read a marker's id in two places with no "
-            "earlier pose to choose by: no pose there (is an id printed twice?)"
+            f"note: {ambiguous} of the {n} frames were ambiguous, no pose there: a marker's "
+            "id read in two places, or a marker nearly face-on whose two tilts fit alike, "
+            "with no recent pose to choose by (is an id printed twice? tilt the marker, or "
+            "see more of the map)"
         )
     deint = deinterlace_note(reader, info.fps)
     if deint:
