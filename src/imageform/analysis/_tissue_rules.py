@@ -80,6 +80,11 @@ _FOLD_SHARE = 0.5
 _FOLD_DENSE = 2.0
 _FOLD_PERCENTILE = 90.0
 _FOLD_LUMA = 3.0
+#: A dense fold (not a stroke) is larger than a cell: at least _FOLD_AREA pixels at 0.5 um
+#: per pixel (a 10 um nucleus: about 300; the areas scale as the shape rules'). Added after
+#: the held-out run (HistoPrep's slide: 1903 dark nuclei on pale stroma, up to 131 pixels
+#: each, taken for dense folds: 99.84 -> 99.18 % kept); checked on the tuning half only.
+_FOLD_AREA = 256
 #: Medians and percentiles of the fold rule on every _FOLD_STRIDE-th pixel of each side of
 #: an image larger than _FOLD_SAMPLE pixels.
 _FOLD_STRIDE = 4
@@ -686,7 +691,10 @@ def _kept(
         n_fold = np.bincount(labels[fold], minlength=count + 1)
         norm = np.sqrt((flags["od"][fold] ** 2).sum(axis=-1))
         od_sum = np.bincount(labels[fold], norm, minlength=count + 1)
+        # dense: a blob larger than a cell (nuclei are dense and hold both stains on pale
+        # tissue)
         dense = od_sum >= float(flags["dense"]) * np.maximum(n_fold, 1)
+        dense &= n_fold >= _FOLD_AREA * s2
         luma = np.bincount(labels[fold], flags["luma"][fold], minlength=count + 1)
         dim = luma < float(flags["dim"]) * n_fold
         folded = (n_fold > 0) & (2 * n_fold >= flagged) & dim & (shaped | dense)
