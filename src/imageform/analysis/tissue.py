@@ -44,14 +44,20 @@ TISSUE_MASK_RULES: MappingProxyType[str, str] = MappingProxyType(
         "ln(I_G/I_R) >= 0.2, and ink-coloured by the ratios above): the region rules are left "
         "out; a pixel whose OD across the ink's direction (its flags' median direction) is "
         "under 0.15 is ink or glass, the rest tissue under the ink",
-        "dark": "black ink, dark folds, debris: luma < dark_luminance (HistoQC's dark "
-        "tissue rule), or a neutral OD (max/min over the channels <= 1.5) with mean OD >= 1; "
-        "where its region (with the paler rim: luma < 2 dark_luminance, or neutral with mean "
-        "OD >= 0.5) is a stroke or its flags large: the dense DAB of IHC nuclei is a blob; "
-        "black ink (mostly neutral with mean OD >= 2.5) a stroke from 3.5 times as long as "
-        "wide; a grey region of at most 24 pixels by the glass is a speck of dye. Lengths "
-        "and areas scale with pixel_size_um (0.5 um per pixel: as given), a stroke's length "
-        "with the image's shorter side under 512 pixels",
+        "dark": "black ink, folds, debris: luma < dark_luminance (HistoQC's dark tissue "
+        "rule), or a neutral OD (max/min over the channels <= 1.5) with mean OD >= 1; black "
+        "ink where its region (with the paler rim: luma < 2 dark_luminance, or neutral with "
+        "mean OD >= 0.5) is neutral (half its dark flags) and a stroke or its flags large: "
+        "the dense DAB of IHC nuclei is a blob; black ink (mostly neutral with mean OD >= "
+        "2.5) a stroke from 3.5 times as long as wide; a grey region of at most 24 pixels by "
+        "the glass is a speck of dye. Folds, on an image that holds eosin (he='auto''s "
+        "test): two layers of the section, so both stains (Ruifrok's H and E vectors) at "
+        "least twice the median of the absorbing pixels; a region where half the flags are "
+        "so is a fold when dark (the mean luma of those < 3 dark_luminance) and a stroke, "
+        "large or dense (their mean ||OD|| >= twice the absorbing pixels' 90th percentile). "
+        "A dark stroke of one stain (dense nuclei, collagen) is tissue. Lengths and areas "
+        "scale with pixel_size_um (0.5 um per pixel: as given), a stroke's length with the "
+        "image's shorter side under 512 pixels",
         "he": "H&E slides only (he=True; DAB is brown and hematoxylin + DAB grey): yellow, "
         "orange and brown margin dye and pigment, OD_blue > 1.2 OD_green with OD_blue >= "
         "pen_min_od; grey (label, slide edge, dirt), max/min of the ODs <= 1.25 with mean "
@@ -129,11 +135,28 @@ def tissue_mask(
       0.15 there: 0.08 here, as 0.1-0.15 drops 1-3.5 % of the dense nuclei of real tiles),
       or a neutral OD, :math:`\max_c OD_c \le 1.5 \min_c OD_c` with mean OD ≥ 1 (black
       ink over tissue; stains are tinted, hematoxylin's OD spans 2.4x). Dense DAB +
-      hematoxylin is near-neutral too, but as blobs: the flags are an artefact where
+      hematoxylin is near-neutral too, but as blobs: the flags are black ink where
       their region (8-connected, with its paler rim: luma below twice
-      ``dark_luminance`` or a neutral OD with mean OD ≥ 0.5) is a stroke as above (6
-      times as long as wide when curved; no hole test: a fold holds paler pixels), or
-      where the flags of a region are large.
+      ``dark_luminance`` or a neutral OD with mean OD ≥ 0.5) is neutral (at least half
+      its dark flags by the neutral rule) and a stroke as above (6 times as long as wide
+      when curved; no hole test: ink holds paler pixels), or where the flags of a region
+      are large. **Folds** (on an image that holds eosin, by ``he="auto"``'s test): a
+      fold is the section lying over itself, two layers or more of the same tissue, so
+      darker *and* holding both stains at least twice (Kothari et al. 2013 and Bautista &
+      Yagi 2010 find folds as pixels both darker and more saturated than the tissue). A
+      pixel is fold-coloured where its hematoxylin and eosin, :math:`C = (S^\top S)^{-1}
+      S^\top OD` with Ruifrok & Johnston's H and E vectors as :math:`S`, are both at
+      least twice their medians over the absorbing pixels (:math:`\lVert OD\rVert \ge
+      0.15`); a dark region (as above, with the fold-coloured pixels) where at least half
+      the flags are fold-coloured is a fold when it is dark (the mean luma of those pixels
+      under 3 ``dark_luminance``) and a stroke, large, or dense (their mean
+      :math:`\lVert OD\rVert` at least twice the 90th percentile of the absorbing
+      pixels': a fold on a slide thumbnail is a blob). A dark stroke of one stain - a
+      chain of dense nuclei, a band of dense collagen - is tissue (the stroke test alone
+      took it for a fold: 12 % of a fresh tile's tissue). On an image without eosin
+      (IHC, where DAB reads as both stains) folds are not looked for; a pale fold (two
+      layers of pale tissue) is not found either: the same stains, denser, do not turn
+      the stain vectors.
     - **he** (``he``, off by default; ``"auto"``: where the image holds eosin): H&E
       slides only. Yellow, orange and brown margin
       dye and pigment, :math:`OD_B > 1.2\, OD_G` (H&E absorb green more than blue), and
@@ -205,9 +228,17 @@ def tissue_mask(
     -----
     Sources: A. Janowczyk et al., "HistoQC: an open-source quality control tool for digital
     pathology slides", JCO Clin. Cancer Inform. 3, 2019 (pen markings, dark tissue at luma
-    0.15, its configuration ``config.ini``); HistomicsTK ``saliency.tissue_detection``
-    (thresholding the hematoxylin channel to get rid of green marker); the deep-histopath
-    pen filters (red, green and blue ink by RGB thresholds); Macenko et al. 2009 (β).
+    0.15, its configuration ``config.ini``); S. Kothari et al., "Eliminating tissue-fold
+    artifacts in histopathological whole-slide images for improved image-based prediction
+    of cancer grade", J. Pathol. Inform. 4:22, 2013, and P. A. Bautista & Y. Yagi,
+    "Improving the visualization and detection of tissue folds in whole slide images
+    through color enhancement", J. Pathol. Inform. 1:25, 2010 (folds darker and more
+    saturated than the tissue: saturation less intensity); A. C. Ruifrok & D. A.
+    Johnston, "Quantification of histochemical staining by color deconvolution", Anal.
+    Quant. Cytol. Histol. 23, 2001 (the H and E vectors); HistomicsTK
+    ``saliency.tissue_detection`` (thresholding the hematoxylin channel to get rid of green
+    marker); the deep-histopath pen filters (red, green and blue ink by RGB thresholds);
+    Macenko et al. 2009 (β).
 
     Examples
     --------
