@@ -257,6 +257,11 @@ def test_black_ink_and_dark_fold_are_excluded() -> None:
     assert dark.sum() > 0.2 * band.sum()
     assert keep[dark].mean() < 0.06
     assert keep[~band].mean() > 0.99
+    # on Dask, the fold rule reads the whole image's medians (not each chunk's): the same
+    # mask in chunks that hold only folded or only unfolded tissue
+    da = pytest.importorskip("dask.array")
+    lazy = tissue_mask(da.from_array(fold8, chunks=(40, 300, 3)), glass=False)
+    assert np.array_equal(np.asarray(lazy.compute()), keep)
 
 
 @pytest.mark.parametrize("stain", ["hematoxylin", "eosin"])

@@ -72,9 +72,13 @@ _DARK_LUMA = 0.08
 #: dark strokes of hematoxylin's colour too (benchmarks/check_stain_artefacts.py: blue ink
 #: over the Kather patches). Without eosin (IHC: DAB reads as both stains) no fold is
 #: looked for. benchmarks/check_stain_fold.py, stain-fold-2026-12-01a.md. A Dask image:
-#: each chunk's own medians and percentile.
+#: the whole image's medians and percentile (_FOLD_DASK_SAMPLE), as in memory.
 _FOLD_H = (0.650, 0.704, 0.286)
 _FOLD_E = (0.072, 0.990, 0.105)
+#: (2, 3): OD -> (C_H, C_E) by least squares on the unit _FOLD_H and _FOLD_E.
+_FOLD_INV = np.linalg.pinv(
+    (np.array([_FOLD_H, _FOLD_E]) / np.linalg.norm([_FOLD_H, _FOLD_E], axis=1)[:, None]).T
+)
 _FOLD_LAYERS = 2.0
 _FOLD_SHARE = 0.5
 _FOLD_DENSE = 2.0
@@ -89,6 +93,9 @@ _FOLD_AREA = 256
 #: an image larger than _FOLD_SAMPLE pixels.
 _FOLD_STRIDE = 4
 _FOLD_SAMPLE = 1 << 20
+#: A Dask image's fold statistics (one for the whole image, as in memory, not one a
+#: block): from a strided sample of at most _FOLD_DASK_SAMPLE pixels.
+_FOLD_DASK_SAMPLE = 1 << 22
 
 
 #: Ink over tissue and the ink's own spread (the pen rule's hysteresis): OD_G < OD_R, or
@@ -313,33 +320,69 @@ def _flags(rgb: np.ndarray, od: np.ndarray, p: dict[str, Any]) -> dict[str, np.n
         out["dim"] = np.full(out["dense"].shape, _FOLD_LUMA * p["dark_luminance"])
         # folds, a region rule: images only (a list of pixels has no neighbours)
         for idx in np.ndindex(shape[:-2]) if len(shape) >= 2 else ():
-            out["fold"][idx], out["dense"][idx] = _fold(r[idx], g[idx], b[idx])
+            out["fold"][idx], out["dense"][idx] = _fold(
+                r[idx], g[idx], b[idx], p.get("fold_stats", "own")
+            )
     return out
 
 
-def _fold(r: np.ndarray, g: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, float]:
+def _fold_step(h: int, w: int) -> int:
+    """Return the stride of the fold rule's statistics in each side of an (h, w) image.
+
+    _FOLD_STRIDE above _FOLD_SAMPLE pixels (1 below); a Dask image's sample, computed into
+    memory, is also kept under _FOLD_DASK_SAMPLE pixels by doubling it (the same stride as
+    in memory up to 2^26 pixels).
+    """
+    return _FOLD_STRIDE if h * w > _FOLD_SAMPLE else 1
+
+
+_Stats = tuple[float, float, float]
+
+
+def _fold_stats(rs: np.ndarray, gs: np.ndarray, bs: np.ndarray) -> _Stats | None:
+    """Return the fold rule's statistics of one 2-D image from its sampled OD channels.
+
+    (median C_H, median C_E, dense OD norm) over the absorbing pixels: the two stains by
+    Ruifrok & Johnston's vectors, least squares, and _FOLD_DENSE times the
+    _FOLD_PERCENTILE-th percentile of their ||OD||; ``None`` on an image without eosin
+    (IHC) or with under 16 absorbing pixels.
+    """
+    norm2 = rs * rs + gs * gs + bs * bs
+    absorbing = norm2 >= _SPECK_GLASS * _SPECK_GLASS
+    if absorbing.sum() < 16 or _eosin_share(rs, gs, bs) < _EOSIN_SHARE:
+        return None
+    inv = _FOLD_INV
+    ch = inv[0, 0] * rs + inv[0, 1] * gs + inv[0, 2] * bs
+    ce = inv[1, 0] * rs + inv[1, 1] * gs + inv[1, 2] * bs
+    mh, me = float(np.median(ch[absorbing])), float(np.median(ce[absorbing]))
+    dense = _FOLD_DENSE * float(np.percentile(np.sqrt(norm2[absorbing]), _FOLD_PERCENTILE))
+    return mh, me, dense
+
+
+def _fold(
+    r: np.ndarray,
+    g: np.ndarray,
+    b: np.ndarray,
+    stats: _Stats | str | None = "own",
+) -> tuple[np.ndarray, float]:
     """Fold-coloured pixels of one 2-D image (its OD channels) and its dense OD norm.
 
     Both stains at least _FOLD_LAYERS times their medians (:data:`_FOLD_LAYERS`); none on
     an image without eosin (IHC). The OD norm of a dense fold: _FOLD_DENSE times the
     _FOLD_PERCENTILE-th percentile of the absorbing pixels' (inf where there are none).
+    ``stats``: :func:`_fold_stats` of the whole image (a Dask image's block), or "own"
+    (the image's).
     """
     none = np.zeros(r.shape, dtype=bool)
-    step = _FOLD_STRIDE if r.size > _FOLD_SAMPLE else 1
-    rs, gs, bs = r[::step, ::step], g[::step, ::step], b[::step, ::step]
-    norm2 = rs * rs + gs * gs + bs * bs
-    absorbing = norm2 >= _SPECK_GLASS * _SPECK_GLASS
-    if absorbing.sum() < 16 or _eosin_share(rs, gs, bs) < _EOSIN_SHARE:
+    if isinstance(stats, str):
+        step = _fold_step(*r.shape)
+        stats = _fold_stats(r[::step, ::step], g[::step, ::step], b[::step, ::step])
+    if stats is None:
         return none, float("inf")
-    basis = np.array([_FOLD_H, _FOLD_E], dtype=np.float64)
-    basis /= np.linalg.norm(basis, axis=1, keepdims=True)
-    inv = np.linalg.pinv(basis.T)  # (2, 3): OD -> (C_H, C_E), least squares
-    ch = inv[0, 0] * rs + inv[0, 1] * gs + inv[0, 2] * bs
-    ce = inv[1, 0] * rs + inv[1, 1] * gs + inv[1, 2] * bs
-    mh, me = float(np.median(ch[absorbing])), float(np.median(ce[absorbing]))
-    dense = _FOLD_DENSE * float(np.percentile(np.sqrt(norm2[absorbing]), _FOLD_PERCENTILE))
+    mh, me, dense = stats
     if not (mh > 0 and me > 0):
         return none, dense
+    inv = _FOLD_INV
     # eosin first, hematoxylin where eosin passes (most pixels fail the first)
     out = inv[1, 0] * r + inv[1, 1] * g + inv[1, 2] * b >= _FOLD_LAYERS * me
     where = np.nonzero(out)
@@ -802,12 +845,24 @@ def keep_mask(
         return _block(np.asarray(rgb), log_i0, params, glass, beta, found)
     if params.get("wash") == "subtract":
         params["wash"] = "whole"
-    if params.get("he") == "auto":  # one decision for the whole array (a reduction)
-        import dask
+    import dask
 
+    todo: dict[str, Any] = {}
+    if params.get("he") == "auto":  # one decision for the whole array (a reduction)
         od = log_i0 - np.log(rgb.astype(np.float64).clip(_FLOOR, None))
-        share = _eosin_share(od[..., 0], od[..., 1], od[..., 2])
-        params["he"] = bool(float(dask.compute(share)[0]) >= _EOSIN_SHARE)
+        todo["share"] = _eosin_share(od[..., 0], od[..., 1], od[..., 2])
+    if params["dark"] and rgb.ndim == 3:  # the fold rule's statistics: the image's, not a block's
+        h, w = int(rgb.shape[0]), int(rgb.shape[1])
+        step = _fold_step(h, w)
+        while -(-h // step) * -(-w // step) > _FOLD_DASK_SAMPLE:
+            step *= 2
+        todo["sample"] = rgb[::step, ::step]
+    done = dict(zip(todo, dask.compute(*todo.values()), strict=True))
+    if "share" in done:
+        params["he"] = bool(float(done["share"]) >= _EOSIN_SHARE)
+    if "sample" in done:
+        sod = _od(np.asarray(done["sample"]), log_i0)
+        params["fold_stats"] = _fold_stats(sod[..., 0], sod[..., 1], sod[..., 2])
     reach = params["margin"] + 1 + (_STROKE_RADIUS + _STROKE_REACH if params["pen"] else 0)
     reach += int(2 * _LONG * max(scale[0], 1.0))  # the regions' shapes: a stroke's length
     depth = {ax: min(reach, int(rgb.shape[ax])) for ax in (rgb.ndim - 3, rgb.ndim - 2)}
