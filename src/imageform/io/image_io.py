@@ -13,8 +13,11 @@ One rule for every format:
   TIFF or ``.npy`` comes back as ``(H, W, 1)``).
 - **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
   (float16 is widened to float32). A TIFF's signed integers (int8, int16, int32: a CT's or a
-  microscope's numbers) come as floats holding each stored number exactly, float32 (float64
-  for int32), as a DICOM's signed samples do. Other sample types are refused. A TIFF's
+  microscope's numbers) and uint32 (a photon counter's) come as floats holding each stored
+  number exactly, float32 (float64 for int32 and uint32), as a DICOM's signed samples do.
+  Other sample types are refused, by :func:`image_info` as by :func:`read_image`: a TIFF's
+  complex samples (SampleFormat 5 or 6; a complex number is no image: save its magnitude or
+  real part) and 64-bit integers in one line saying so. A TIFF's
   samples are read as the values they mean: a palette through its colour map (RGB), a
   bilevel image as 0/255, WhiteIsZero inverted; a CMYK TIFF as sRGB through its embedded
   CMYK ICC profile (LittleCMS, 8 and 16 bits; without one refused), a Lab or raw-YCbCr TIFF
@@ -92,6 +95,7 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._files import (
+    RAW_SUFFIXES,
     atomic_write,
     check_writable,
     final_name,
@@ -349,6 +353,13 @@ def _suffix_format(path: str | Path) -> str:
                     return "dicom"
         except (OSError, ValueError):  # a missing file, a name with NUL ...
             pass
+        suffix = Path(path).suffix.lower()
+        if suffix in RAW_SUFFIXES:  # read by develop, not as an image
+            raise InvalidInputError(
+                f"{shorten(Path(path))} is a camera raw file ({suffix}), not an image: make "
+                "one with imageform develop (sfr, characterize, emva and info read raw files "
+                "as they are; in Python imageform.io.read_raw)"
+            ) from None
         raise
 
 
@@ -480,6 +491,7 @@ def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, I
         _check_frame(path, frame, math.prod(n for _, n in stack))
     channels = shape[axes.index("S")] if "S" in axes else 1
     page = _frame_page(tif, series, frame)
+    _refuse_tiff_samples(path, series.dtype, page)
     if channels in (4, 5) and _tiff_cmyk_profile(page) is not None:  # read as sRGB (+ alpha)
         channels -= 1
     if channels > 4:  # refused here, so that image_info says what read_image does
@@ -492,8 +504,10 @@ def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, I
         )
     width, height = shape[axes.index("X")], shape[axes.index("Y")]
     dtype = "uint8" if series.dtype == np.bool_ else str(series.dtype)  # bilevel: 0/255
-    if series.dtype.kind == "i" and series.dtype.itemsize <= 4:  # signed: floats, as stored
-        dtype = str(_signed_as_float(series.dtype))
+    if _read_as_numbers(series.dtype):  # int8/16/32, uint32: floats, each number as stored
+        dtype = str(_numbers_as_float(series.dtype))
+    elif series.dtype == np.float16:  # widened, as read_image returns it
+        dtype = "float32"
     if int(page.photometric) == 3 and page.colormap is not None:  # palette: RGB, as read
         cmap = np.asarray(page.colormap)
         eight = int(cmap.max(initial=0)) < 256 or not np.any(cmap % 257)
@@ -555,20 +569,25 @@ def image_frames(path: str | Path) -> ImageFrames:
 
 
 def pixel_size_um(path: str | Path) -> tuple[float, float] | None:
-    r"""Return the pixel size in micrometres (x, y) a microscopy file states, or None.
+    r"""Return the pixel size in micrometres (x, y) a microscopy or X-ray file states, or None.
 
     As OpenSlide reads it (its ``openslide.mpp-x`` / ``mpp-y``), of the full-resolution
     level:
 
-    - OME-XML ``PhysicalSizeX`` / ``PhysicalSizeY`` in µm (Bio-Formats, QuPath's exports);
+    - OME-XML ``PhysicalSizeX`` / ``PhysicalSizeY`` (Bio-Formats, QuPath's exports), in
+      their unit (µm by default; nm, mm, cm, m);
     - an Aperio SVS header's ``MPP = ...``;
     - a Philips TIFF's ``DICOM_PIXEL_SPACING`` (mm, rows then columns: the first of its
       pixel data representation sequence, the full resolution);
     - a Ventana BIF's ``ScanRes`` in its XMP ``iScan`` element (µm);
-    - an ImageJ TIFF's resolution with ``unit=micron`` (or µm, um) in its description;
+    - an ImageJ TIFF's resolution with ``unit=micron`` (µm, um, nm, mm, cm, m; not inch)
+      in its description;
     - else the TIFF resolution tags in pixels per centimetre (Hamamatsu NDPI, QPTIFF,
-      libvips, tifffile and imageform's own pyramids) when they give under 100 µm: photo
-      software writes 72 dpi (353 µm) to any file, and in inches (never read);
+      libvips, tifffile and imageform's own pyramids; an X-ray detector's or a macro
+      camera's 50-400 µm) when they give under 1000 µm and are not a screen's 72 or 96 dpi
+      converted (352.8 and 264.6 µm: photo software writes those to any file; libvips writes
+      1000 µm to a file of unknown resolution); in inches they are never read (every
+      photograph states 72 or 300 dpi);
     - a DICOM slide-microscopy image's Pixel Spacing (mm, modality SM).
 
     Other formats: None.
@@ -603,7 +622,10 @@ def pixel_size_um(path: str | Path) -> tuple[float, float] | None:
             res = _resolution(page)
     except Exception:
         return None
-    return _stated_microns(desc, xmp_text, res)
+    um = _stated_microns(desc, xmp_text, res)
+    if um is None or not all(math.isfinite(v) and v > 0 for v in um):  # 0: not stated
+        return None
+    return um
 
 
 def _tag_text(value: Any) -> str:
@@ -625,9 +647,37 @@ def _resolution(page: Any) -> tuple[float, float, int] | None:
     return xr[0] / xr[1], yr[0] / yr[1], unit
 
 
-#: The largest pixel a resolution tag in centimetres is read as (µm): microscopes and slide
-#: scanners image at 0.1-50 µm; 72 dpi (photo software's default) is 353 µm.
-_MAX_TAG_MICRONS = 100.0
+#: The largest pixel (µm, exclusive) a TIFF's resolution tags in centimetres are read as: a
+#: microscope's 0.1-50 µm, a macro photograph's or an X-ray detector's 50-200 µm, a binned
+#: fluoroscopy panel's 300-400 µm. libvips writes 10 px/cm (1 px/mm, 1000 µm) to a file of
+#: unknown resolution, and other writers 1 px/cm: neither is a pixel size.
+_MAX_TAG_MICRONS = 1000.0
+#: Screen resolutions photo and office software write to any file (72 and 96 dpi), in the
+#: pixels per centimetre some of them store (352.8 and 264.6 µm): not a pixel size.
+_SCREEN_DPI = (72.0, 96.0)
+#: Micrometres per unit of OME's PhysicalSize units and ImageJ's ``unit=`` (its spellings).
+_MICRONS_PER_UNIT = {"nm": 1e-3, "µm": 1.0, "um": 1.0, "\u03bcm": 1.0, "micron": 1.0,
+                     "microns": 1.0, "mm": 1e3, "cm": 1e4, "m": 1e6}  # fmt: skip
+#: TIFF ResolutionUnit (3 cm; 4 mm and 5 µm, tifffile's extensions) in µm.
+_RESOLUTION_UNIT_MICRONS = {3: 1e4, 4: 1e3, 5: 1.0}
+
+
+def _tag_microns(res: tuple[float, float, int]) -> tuple[float, float] | None:
+    """Return the pixel size (µm) of TIFF resolution tags in a metric unit, else None.
+
+    Inches are never read (every photograph states 72 or 300 dpi); centimetres are read
+    below :data:`_MAX_TAG_MICRONS`, unless they are a screen's 72 or 96 dpi converted.
+    """
+    per = _RESOLUTION_UNIT_MICRONS.get(res[2])
+    if per is None:
+        return None
+    x, y = per / res[0], per / res[1]
+    if not (0.0 < x < _MAX_TAG_MICRONS and 0.0 < y < _MAX_TAG_MICRONS):
+        return None
+    screen = (25400.0 / dpi for dpi in _SCREEN_DPI)
+    if any(abs(x - s) < 1e-3 * s and abs(y - s) < 1e-3 * s for s in screen):
+        return None
+    return x, y
 
 
 def _stated_microns(
@@ -643,11 +693,14 @@ def _stated_microns(
     xs = re.search(r'PhysicalSizeX="' + number + '"', desc)
     if xs:
         ys = re.search(r'PhysicalSizeY="' + number + '"', desc)
-        units = re.findall(r'PhysicalSize[XY]Unit="([^"]*)"', desc)
-        if any(u not in ("µm", "um", "\u00b5m", "\u03bcm") for u in units):
+        ux = re.search(r'PhysicalSizeXUnit="([^"]*)"', desc)
+        uy = re.search(r'PhysicalSizeYUnit="([^"]*)"', desc)
+        kx = _MICRONS_PER_UNIT.get(ux.group(1) if ux else "µm")  # OME's default: µm
+        ky = _MICRONS_PER_UNIT.get(uy.group(1) if uy else "µm")
+        if kx is None or ky is None:
             return None
-        x = float(xs.group(1))
-        return x, float(ys.group(1)) if ys else x
+        x = float(xs.group(1)) * kx
+        return x, float(ys.group(1)) * ky if ys else x
     if "DPUfsImport" in desc[:2000]:  # Philips: DICOM_PIXEL_SPACING "row" "column" in mm
         q = r'\s*(?:&quot;|")'
         found = list(
@@ -665,13 +718,10 @@ def _stated_microns(
     if desc.startswith("ImageJ=") and res is not None:
         m = re.search(r"^unit=(.*)$", desc, re.MULTILINE)
         unit = m.group(1).strip().replace("\\u00B5", "µ") if m else ""
-        if unit in ("micron", "microns", "um", "µm", "\u03bcm"):
-            return 1.0 / res[0], 1.0 / res[1]
-        return None
-    if res is not None and res[2] == 3:  # pixels per centimetre
-        x, y = 1e4 / res[0], 1e4 / res[1]
-        if x < _MAX_TAG_MICRONS and y < _MAX_TAG_MICRONS:
-            return x, y
+        k = _MICRONS_PER_UNIT.get(unit)  # not inch, pixel
+        return (k / res[0], k / res[1]) if k is not None else None
+    if res is not None:
+        return _tag_microns(res)
     return None
 
 
@@ -1281,13 +1331,51 @@ def _tiff_frame(series: Any, path: Path, frame: int | None) -> tuple[np.ndarray,
     return whole[tuple(next(pick) if a not in "YXS" else slice(None) for a in axes)], plane
 
 
-def _signed_as_float(dtype: Any) -> np.dtype[Any]:
-    """Return the float type a TIFF's signed integer samples are read as: each number exactly.
+def _read_as_numbers(dtype: Any) -> bool:
+    """Whether a TIFF's integer samples are read as floats holding the numbers.
 
-    float32 holds int8 and int16 exactly, float64 int32 (float32's 24-bit mantissa does
-    not), as a DICOM's signed samples come as float32, float64 beyond 24 stored bits.
+    int8, int16, int32 (signed) and uint32 (beyond uint16, the widest integer an image
+    comes as).
+    """
+    dt = np.dtype(dtype)
+    return (dt.kind == "i" and dt.itemsize <= 4) or dt == np.uint32
+
+
+def _numbers_as_float(dtype: Any) -> np.dtype[Any]:
+    """Return the float type a TIFF's int8/16/32 or uint32 samples are read as: each exactly.
+
+    float32 holds int8 and int16 exactly, float64 int32 and uint32 (float32's 24-bit
+    mantissa does not), as a DICOM's signed samples come as float32, float64 beyond 24
+    stored bits.
     """
     return np.dtype(np.float32 if np.dtype(dtype).itemsize <= 2 else np.float64)
+
+
+def _refuse_tiff_samples(path: Path, dtype: Any, page: Any) -> None:
+    """Refuse, in one line, a TIFF whose samples are no image's: complex, 64-bit integers.
+
+    A complex sample (SampleFormat 5 or 6: a radar's SLC, a Fourier transform, an MR's
+    k-space) is two numbers; which one is an image (its magnitude, phase, real part) is the
+    caller's choice. 64-bit integers do not fit a float64 exactly.
+    """
+    dt = np.dtype(dtype)
+    if dt.kind == "c":
+        fmt = int(getattr(page, "sampleformat", 6) or 6)
+        bits = int(getattr(page, "bitspersample", 8 * dt.itemsize) or 8 * dt.itemsize) // 2
+        part = f"int{bits}" if fmt == 5 else f"float{bits}"
+        raise UnreadableFileError(
+            path,
+            f"a TIFF of complex {part} samples (SampleFormat {fmt}: a radar's, a Fourier "
+            "transform's or k-space's values); a complex number is not an image: save the "
+            "part you mean as a float TIFF and read that, e.g. "
+            "tifffile.imwrite(out, numpy.abs(tifffile.imread(in))) (or .real, numpy.angle)",
+        )
+    if dt.kind in "iu" and dt.itemsize > 4:
+        raise UnreadableFileError(
+            path,
+            f"a TIFF of {dt} samples; imageform reads integers of 8 to 32 bits (uint32 and "
+            "int32 as float64, exact): save it as float64 or a narrower integer first",
+        )
 
 
 def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarray, bool]:
@@ -1319,8 +1407,8 @@ def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarra
     if cmyk is not None:
         return _orient(_tiff_cmyk_to_rgb(p, arr, cmyk), orientation), extra > 0
     arr = _tiff_samples(p, arr, photometric, bits, colormap)
-    if arr.dtype.kind == "i" and arr.dtype.itemsize <= 4:  # int8/16/32: the numbers, as floats
-        arr = arr.astype(_signed_as_float(arr.dtype))
+    if _read_as_numbers(arr.dtype):  # int8/16/32, uint32: the numbers, as floats
+        arr = arr.astype(_numbers_as_float(arr.dtype))
     return _orient(arr, orientation), extra > 0
 
 
