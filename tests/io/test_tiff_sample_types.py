@@ -179,3 +179,83 @@ def test_info_prints_an_x_ray_pixel_size(
     p = _res(tmp_path / "xray.tif", 139.0, "CENTIMETER")
     assert main(["info", str(p)]) == 0
     assert "pixel size: 139 x 139 µm" in capsys.readouterr().out
+
+
+def test_pages_of_different_sizes_are_frames(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A plain multi-page TIFF whose pages differ (libtiff's ``multipage.tif``: a bilevel
+    fax page, a 4-bit palette image, an 8-bit one) was read as its first page, the others
+    silently left out (tifffile makes a series per page shape). It is refused as a stack is,
+    naming the sizes, and ``frame=N`` reads page N; a reduced-resolution page (a thumbnail,
+    NewSubfileType 1) is no image of its own."""
+    p = tmp_path / "pages.tif"
+    grey = RNG.integers(0, 256, (30, 20), dtype=np.uint8)
+    rgb = RNG.integers(0, 256, (12, 16, 3), dtype=np.uint8)
+    with tifffile.TiffWriter(p) as w:
+        w.write(grey)
+        w.write(rgb, photometric="rgb")
+        w.write(grey[:10, :10])
+    with pytest.raises(InvalidInputError, match=r"multi-page TIFF of 3 images of different si"):
+        read_image(p)
+    with pytest.raises(InvalidInputError, match=r"20 x 30 px uint8, 16 x 12 px uint8, 10 x 10"):
+        image_info(p)
+    from imageform.io import image_frames
+
+    assert image_frames(p) == (3, (("pages", 3),))
+    np.testing.assert_array_equal(read_image(p, frame=0)[..., 0], grey)
+    np.testing.assert_array_equal(read_image(p, frame=1), rgb)
+    np.testing.assert_array_equal(read_image(p, frame=2)[..., 0], grey[:10, :10])
+    assert image_info(p, frame=1) == (16, 12, 3, "uint8", "tiff")
+    with pytest.raises(InvalidInputError, match=r"frame 3 is out of range: .* 3 images"):
+        read_image(p, frame=3)
+    assert main(["info", str(p)]) == 0
+    out = capsys.readouterr().out
+    assert "3 images (3 pages), of different sizes or types (frame 0: 20 x 30 px" in out
+    thumb = tmp_path / "thumb.tif"
+    with tifffile.TiffWriter(thumb) as w:
+        w.write(rgb, photometric="rgb")
+        w.write(rgb[::4, ::4], photometric="rgb", subfiletype=1)
+    np.testing.assert_array_equal(read_image(thumb), rgb)
+    assert image_frames(thumb).total == 1
+
+
+def _png_with_cicp(path: Path, cicp: bytes, *, gama: bool = True) -> Path:
+    """An 8-bit RGB PNG with a cICP chunk (and a gAMA of 1.6 that cICP overrides)."""
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        crc = zlib.crc32(kind + body) & 0xFFFFFFFF
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", crc)
+
+    rows = b"".join(b"\0" + bytes([40, 80, 120] * 4) for _ in range(3))
+    data = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 4, 3, 8, 2, 0, 0, 0))
+    if gama:
+        data += chunk(b"gAMA", struct.pack(">I", 62500))
+    data += chunk(b"cICP", cicp) + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b"")
+    path.write_bytes(data)
+    return path
+
+
+def test_png_cicp_overrides_the_other_colour_chunks(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """libavif's ``kodim03_grayscale_cicp.png`` (cICP 1/4/0/1 beside gAMA 0.625 and cHRM) was
+    described by its gAMA, which PNG 3rd ed. says to ignore when cICP is present; an HDR
+    screenshot's cICP (BT.2020 primaries, PQ: 9/16/0/1) declared nothing."""
+    from imageform.io import DeclaredColorSpace, image_color_space
+
+    p3 = _png_with_cicp(tmp_path / "p3.png", bytes([12, 13, 0, 1]))
+    assert image_color_space(p3) == DeclaredColorSpace(
+        "display_p3", "png-cicp", "cICP primaries 12, transfer 13, matrix 0, full range 1"
+    )
+    np.testing.assert_array_equal(read_image(p3)[0, 0], [40, 80, 120])
+    pq = _png_with_cicp(tmp_path / "pq.png", bytes([9, 16, 0, 1]), gama=False)
+    assert image_color_space(pq).name is None and image_color_space(pq).source == "png-cicp"
+    assert main(["info", str(pq)]) == 0
+    out = capsys.readouterr().out
+    assert "no space of imageform matches (cICP primaries 9, transfer 16" in out
+    out_png = tmp_path / "o.png"
+    assert main(["cvd", str(p3), "--type", "deutan", "-o", str(out_png)]) == 0
+    assert "declares display_p3 in its PNG cICP chunk" in capsys.readouterr().err

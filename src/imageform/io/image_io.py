@@ -27,7 +27,8 @@ One rule for every format:
   sensor's numbers (DN), as tifffile and scikit-image read them: measurements (``emva``,
   ``characterize``) need them so;
   such an image looks dark until scaled by ``65535 / (2**bits - 1)``.
-- **One image**: a TIFF holding a stack (pages, time points, z-planes) and an animated GIF or
+- **One image**: a TIFF holding a stack (pages, time points, z-planes; a plain multi-page
+  TIFF whose pages differ in size or type too, thumbnails aside) and an animated GIF or
   WebP are refused in one line saying what they hold and how to pick one, rather than read as
   their first image; ``frame=N`` reads image ``N`` (:func:`image_frames` counts them). A TIFF
   of more than 4 samples per pixel (multispectral bands) is refused, by :func:`image_info` as
@@ -474,11 +475,77 @@ def _check_frame(path: Path, frame: object, count: int) -> int:
     return int(frame)
 
 
-def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, ImageInfo]:
-    """Return the first series of a TIFF and what one image of it is (a stack needs frame)."""
+#: tifffile's series kinds of a plain multi-page TIFF: pages as written (``generic``) or
+#: with tifffile's own shape metadata (``shaped``: one series per ``imwrite`` call).
+_PLAIN_SERIES = ("generic", "shaped")
+
+
+def _tiff_images(tif: Any) -> list[Any]:
+    """Return the series of a TIFF that are images of their own, the first first.
+
+    A plain multi-page TIFF (tifffile's generic or shaped series: a fax, a scan of several
+    sheets, a page per size) whose pages differ in size or sample type is several series; each is an
+    image (or a stack of them) as a stack's pages are. Reduced-resolution pages (thumbnails,
+    NewSubfileType 1) and transparency masks (4) are not. A slide scanner's, OME or ImageJ
+    TIFF is its first series (its other series are a label, a macro photograph, a thumbnail).
+    """
+    first = tif.series[0]
+    if first.kind not in _PLAIN_SERIES:
+        return [first]
+    return [first] + [
+        s for s in tif.series[1:]
+        if s.kind in _PLAIN_SERIES and not int(getattr(s.keyframe, "subfiletype", 0) or 0) & 5
+    ]  # fmt: skip
+
+
+def _series_count(series: Any) -> int:
+    """Count the images one TIFF series holds (its axes but Y, X, samples; 1 if none)."""
+    return math.prod(n for _, n in _stack_axes(series.axes, series.shape))
+
+
+def _tiff_pick(tif: Any, path: Path, frame: int | None) -> tuple[Any, int | None]:
+    """Return the series holding image ``frame`` of a TIFF and the frame within that series.
+
+    A TIFF of several images of their own (:func:`_tiff_images`) without ``frame`` is
+    refused in one line naming their sizes; ``frame`` counts over them in the file's order.
+    """
+    images = _tiff_images(tif)
+    if len(images) == 1:
+        return images[0], frame
+    counts = [_series_count(s) for s in images]
+    total = sum(counts)
+    if frame is None:
+        sizes = ", ".join(
+            (f"{n} x " if n > 1 else "")
+            + f"{s.shape[s.axes.index('X')]} x {s.shape[s.axes.index('Y')]} px "
+            + ("bilevel" if s.dtype == np.bool_ else str(s.dtype))
+            for s, n in zip(images[:6], counts, strict=False)
+            if "X" in s.axes and "Y" in s.axes
+        ) + (", ..." if len(images) > 6 else "")
+        raise UnreadableFileError(
+            path,
+            f"a multi-page TIFF of {total} images of different sizes or types ({sizes}); read "
+            f"one with frame=N, 0 to {total - 1} (imageform's commands: --frame N)",
+        )
+    index = _check_frame(path, frame, total)
+    for s, n in zip(images, counts, strict=True):
+        if index < n:
+            return s, (index if n > 1 else None)
+        index -= n
+    raise AssertionError("unreachable: frame checked against the total")
+
+
+def _tiff_series(
+    tif: Any, path: Path, frame: int | None = None
+) -> tuple[Any, ImageInfo, int | None]:
+    """Return the series of a TIFF holding its image, what one image of it is, the inner frame.
+
+    ``frame`` picks one of several images (a stack's, or a multi-page file's); the frame
+    returned is the index within the series picked (None where it holds one image).
+    """
     if not tif.series:
         raise UnreadableFileError(path, "the TIFF holds no image")
-    series = tif.series[0]
+    series, frame = _tiff_pick(tif, path, frame)
     axes = series.axes
     shape = series.shape
     if "Y" not in axes or "X" not in axes:
@@ -513,7 +580,7 @@ def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, I
         eight = int(cmap.max(initial=0)) < 256 or not np.any(cmap % 257)
         channels, dtype = 3, "uint8" if eight else "uint16"
     info = ImageInfo(width, height, channels, dtype, "tiff")
-    return series, info
+    return series, info, frame
 
 
 def image_frames(path: str | Path) -> ImageFrames:
@@ -546,8 +613,11 @@ def image_frames(path: str | Path) -> ImageFrames:
     if fmt == "tiff":
         try:
             with _tifffile().TiffFile(p) as tif:
-                if tif.series:
-                    axes = _stack_axes(tif.series[0].axes, tif.series[0].shape)
+                images = _tiff_images(tif) if tif.series else []
+                if len(images) > 1:  # pages of different sizes or types
+                    axes = (("pages", sum(_series_count(s) for s in images)),)
+                elif images:
+                    axes = _stack_axes(images[0].axes, images[0].shape)
         except Exception as exc:
             raise UnreadableFileError(p, f"{_one_line(exc)}") from None
     elif fmt == "dicom":
@@ -777,8 +847,8 @@ def image_info(path: str | Path, *, frame: int | None = None) -> ImageInfo:
         tifffile = _tifffile()
         try:
             with tifffile.TiffFile(p) as tif:
-                head = _tiff_series(tif, p, frame)[1]
-                tag = tif.pages[0].tags.get(274)
+                series, head, inner = _tiff_series(tif, p, frame)
+                tag = _frame_page(tif, series, inner).tags.get(274)
                 return _upright(head, int(tag.value) if tag is not None else 1)
         except InvalidInputError:
             raise
@@ -1176,6 +1246,30 @@ def _png_has_chunk(data: bytes, kind: bytes) -> bool:
     return False
 
 
+def _png_cicp(p: Path) -> tuple[int, int, int, int] | None:
+    """Return a PNG's ``cICP`` chunk (H.273 primaries, transfer, matrix, full range) or None.
+
+    PNG 3rd ed. sec. 11.3.2.6: the chunk comes before the image data; a decoder that knows it
+    ignores ``iCCP``, ``sRGB``, ``gAMA`` and ``cHRM`` (sec. 4.3). The chunk headers are read
+    one by one (seeking past each body), not the file.
+    """
+    with p.open("rb") as fh:
+        fh.seek(len(_PNG_SIGNATURE))
+        while True:
+            head = fh.read(8)
+            if len(head) < 8:
+                return None
+            length, kind = struct.unpack(">I4s", head)
+            if kind in (b"IDAT", b"IEND"):
+                return None
+            if kind == b"cICP":
+                body = fh.read(length)
+                if length != 4 or len(body) != 4:
+                    return None
+                return body[0], body[1], body[2], body[3]
+            fh.seek(length + 4, os.SEEK_CUR)
+
+
 def _png_decode_interlaced(data: bytes) -> Any:
     """Decode an interlaced PNG, or one with an eXIf chunk, without libpng's notes.
 
@@ -1300,11 +1394,12 @@ def _frame_page(tif: Any, series: Any, frame: int | None) -> Any:
     takes that page's. A page tifffile loads as a TiffFrame (no tags of its own) is described
     by its key frame.
     """
+    first = tif.pages[0] if series is tif.series[0] else series.keyframe
     if frame is None or not frame:
-        return tif.pages[0]
+        return first
     stack = [n for a, n in zip(series.axes, series.shape, strict=True) if a not in "YXS"]
     if len(series.pages) != math.prod(stack):
-        return tif.pages[0]
+        return first
     page = series.pages[frame]
     return page if hasattr(page, "tags") else series.keyframe
 
@@ -1382,7 +1477,7 @@ def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarra
     tifffile = _tifffile()
     try:
         with tifffile.TiffFile(p) as tif:
-            series, info = _tiff_series(tif, p, frame)
+            series, info, frame = _tiff_series(tif, p, frame)
             _check_pixels(p, info, limit)
             page = _frame_page(tif, series, frame)
             tag = page.tags.get(274)
@@ -2062,7 +2157,10 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     :func:`identify_icc` (a CMYK JPEG's CMYK profile: ``srgb``, what :func:`read_image`
     converts it to); HEIF's ``nclx`` colour description (H.273 code points:
     BT.709/sRGB, Display P3 or BT.2020 primaries with the sRGB, BT.709 or a
-    linear transfer); PNG's ``sRGB`` chunk; PNG's ``gAMA`` and ``cHRM`` chunks (gAMA
+    linear transfer); a PNG's ``cICP`` chunk before all of these (PNG 3rd ed.: it overrides
+    ``iCCP``, ``sRGB``, ``gAMA``, ``cHRM``; the same code points, source ``png-cicp``; PQ,
+    HLG or a BT.470 gamma give ``name`` None with the code points described); PNG's ``sRGB``
+    chunk; PNG's ``gAMA`` and ``cHRM`` chunks (gAMA
     1/2.2 within 5 % is sRGB's curve, 1.0 a ``linear_`` space; source ``png-gama`` or
     ``png-chrm``; a gamma or primaries of no space give ``name`` None with the chunks
     described); EXIF ``ColorSpace`` 1 (sRGB), or
@@ -2150,6 +2248,12 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
         if recorded is not None:
             return DeclaredColorSpace(recorded, "tiff-description", "")
         return DeclaredColorSpace(None, "none", "")
+    cicp = _png_cicp(p) if fmt == "png" else None
+    if cicp is not None:  # PNG 3rd ed.: it overrides iCCP, sRGB, gAMA and cHRM
+        prim, trc, matrix, full = cicp
+        text = f"cICP primaries {prim}, transfer {trc}, matrix {matrix}, full range {full}"
+        name = _NCLX.get((prim, trc)) if matrix == 0 and full == 1 else None
+        return DeclaredColorSpace(name, "png-cicp", text)
     try:
         with _pillow_open(p) as im:
             icc = im.info.get("icc_profile")

@@ -548,6 +548,7 @@ def declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
                 "png-srgb": "its sRGB chunk",
                 "png-gama": f"its PNG gAMA/cHRM chunks ({declared.description})",
                 "png-chrm": f"its PNG cHRM chunk ({declared.description})",
+                "png-cicp": f"its PNG cICP chunk ({declared.description})",
                 "tiff-description": "its TIFF description (written by imageform)",
                 "radiance": "its Radiance HDR header (linear RGB)",
             }.get(declared.source, "its EXIF tags")
@@ -559,7 +560,7 @@ def declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
             f"note: {image} carries an ICC profile imageform does not recognise "
             f"({declared.description or 'no description'}); read as srgb (--from overrides)"
         )
-    elif declared.source in ("png-gama", "png-chrm"):
+    elif declared.source in ("png-gama", "png-chrm", "png-cicp"):
         run.note(
             f"note: {image} declares {declared.description} in its PNG chunks, which no space "
             "imageform knows matches; read as srgb (--from overrides)"

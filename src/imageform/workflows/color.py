@@ -964,9 +964,9 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
     space = declared.name or "not declared (read as sRGB)"
     if declared.name is None and declared.source == "icc":
         space = f"an ICC profile imageform does not recognise ({declared.description})"
-    elif declared.name is None and declared.source in ("png-gama", "png-chrm"):
+    elif declared.name is None and declared.source in ("png-gama", "png-chrm", "png-cicp"):
         space = f"PNG chunks no space of imageform matches ({declared.description}); read as sRGB"
-    elif declared.source in ("png-gama", "png-chrm"):
+    elif declared.source in ("png-gama", "png-chrm", "png-cicp"):
         space = f"{declared.name} ({declared.description})"
     how = {
         "none": "",
@@ -1027,9 +1027,23 @@ def _frames_info(image: Path, frames: Any) -> Result:
     numbers = tiff_number_type(image) if head.format == "tiff" else None
     summary["stored_dtype"] = numbers or head.dtype
     last = frames.total - 1
+    # a multi-page TIFF's pages may differ (a fax page and a colour photograph): each's size
+    picked = range(frames.total) if frames.total <= 64 else (0, last)
+    heads = [head] + [image_info(image, frame=k) for k in picked if k]
+    summary["sizes_differ"] = len({(h.width, h.height, h.channels, h.dtype) for h in heads}) > 1
+    if summary["sizes_differ"]:
+        shown = "; ".join(
+            f"frame {k}: {h.width} x {h.height} px, {h.channels} channel(s), {h.dtype}"
+            for k, h in zip(picked, heads, strict=False)
+        )
+        each = f"of different sizes or types ({shown})"
+    else:
+        each = (
+            f"each {head.width} x {head.height} px, {head.channels} channel(s), "
+            f"{head.dtype}{stored_as(numbers)}"
+        )
     text = [
-        f"{image}: {head.format}, {frames.total} images ({what}), each {head.width} x "
-        f"{head.height} px, {head.channels} channel(s), {head.dtype}{stored_as(numbers)}",
+        f"{image}: {head.format}, {frames.total} images ({what}), {each}",
         f"frames 0 to {last}, in the file's order; read one: imageform COMMAND --frame N, "
         "read_image(path, frame=N)",
     ]
