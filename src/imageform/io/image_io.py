@@ -1222,7 +1222,7 @@ def _read_png(p: Path, limit: int) -> np.ndarray:
     try:
         # Adam7-interlaced (IHDR's last byte): libpng warns of imagecodecs' call; an eXIf
         # chunk libpng finds invalid: it says so on stderr (the pixels are fine)
-        quiet = data[28] == 1 or _png_has_chunk(data, b"eXIf")
+        quiet = data[28] == 1 or _png_has_chunk(data, b"eXIf") or _png_out_of_order(data)
         decode = _png_decode_interlaced if quiet else imagecodecs.png_decode
         arr = decode(data)
     except Exception as exc:
@@ -1231,6 +1231,34 @@ def _read_png(p: Path, limit: int) -> np.ndarray:
 
 
 _stderr_lock = threading.Lock()
+
+
+#: Chunks PNG places before PLTE (colour space, significant bits: PNG 3rd ed. table 7), and
+#: those it places after it (transparency, background, histogram).
+_PNG_BEFORE_PLTE = (b"cHRM", b"gAMA", b"iCCP", b"sBIT", b"sRGB", b"cICP")
+_PNG_AFTER_PLTE = (b"tRNS", b"bKGD", b"hIST")
+
+
+def _png_out_of_order(data: bytes) -> bool:
+    """Whether a PNG's chunks before its image data break PNG's order around PLTE.
+
+    libpng then says "PLTE: out of place" (libavif's ``circle-trns-before-plte.png``: tRNS
+    before PLTE) or "gAMA: out of place" on stderr, a second line beside a command's one,
+    and decodes the pixels as they are: such a file is decoded with its notes as warnings.
+    """
+    pos, seen = len(_PNG_SIGNATURE), []
+    while pos + 8 <= len(data):
+        length, kind = struct.unpack(">I4s", data[pos : pos + 8])
+        if kind in (b"IDAT", b"IEND"):
+            break
+        seen.append(kind)
+        pos += 12 + length
+    if b"PLTE" not in seen:
+        return False
+    at = seen.index(b"PLTE")
+    return any(k in _PNG_AFTER_PLTE for k in seen[:at]) or any(
+        k in _PNG_BEFORE_PLTE for k in seen[at + 1 :]
+    )
 
 
 def _png_has_chunk(data: bytes, kind: bytes) -> bool:
@@ -1277,17 +1305,37 @@ def _png_decode_interlaced(data: bytes) -> Any:
     Interlace handling should be turned on when using png_read_image" onto ``sys.stderr``
     (the pixels are right: PngSuite's interlaced images equal OpenCV's decoding), a second
     line beside a command's one. That line is dropped; any other libpng message becomes a
-    warning (libpng's "eXIf: invalid" for an EXIF block it cannot parse, which the pixels
-    do not need). ``sys.stderr`` is swapped for the decode (interlaced PNGs only), under a lock.
+    warning (libpng's "eXIf: invalid" for an EXIF block it cannot parse, "PLTE: out of place"
+    for chunks out of PNG's order, which the pixels do not need). imagecodecs logs them
+    (its ``imagecodecs`` logger, which without a handler prints onto ``sys.stderr``): the
+    logger's records and ``sys.stderr`` are both taken for the decode (these PNGs only),
+    under a lock.
     """
     import contextlib
     import io
+    import logging
 
     import imagecodecs
 
+    class _Taken(logging.Handler):
+        def __init__(self) -> None:
+            super().__init__()
+            self.lines: list[str] = []
+
+        def emit(self, record: logging.LogRecord) -> None:
+            self.lines.append(record.getMessage())
+
+    taken = _Taken()
+    logger = logging.getLogger("imagecodecs")
     with _stderr_lock, contextlib.redirect_stderr(io.StringIO()) as said:
-        arr = imagecodecs.png_decode(data)
-    for line in said.getvalue().splitlines():
+        propagate, logger.propagate = logger.propagate, False
+        logger.addHandler(taken)
+        try:
+            arr = imagecodecs.png_decode(data)
+        finally:
+            logger.removeHandler(taken)
+            logger.propagate = propagate
+    for line in [*taken.lines, *said.getvalue().splitlines()]:
         if line.strip() and "Interlace handling should be turned on" not in line:
             warnings.warn(line.strip(), stacklevel=4)
     return arr

@@ -259,3 +259,30 @@ def test_png_cicp_overrides_the_other_colour_chunks(
     out_png = tmp_path / "o.png"
     assert main(["cvd", str(p3), "--type", "deutan", "-o", str(out_png)]) == 0
     assert "declares display_p3 in its PNG cICP chunk" in capsys.readouterr().err
+
+
+def test_png_chunks_out_of_order_give_a_warning_not_a_stderr_line(
+    tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """libavif's ``circle-trns-before-plte.png`` (an RGB image with a suggested palette and
+    tRNS before it): libpng printed "PNG warning: PLTE: out of place" onto stderr beside
+    every command's output. The pixels are as stored; the note is a Python warning."""
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        crc = zlib.crc32(kind + body) & 0xFFFFFFFF
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", crc)
+
+    rows = b"".join(b"\0" + bytes([10, 200, 30] * 5) for _ in range(2))
+    p = tmp_path / "order.png"
+    p.write_bytes(
+        b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 5, 2, 8, 2, 0, 0, 0))
+        + chunk(b"tRNS", bytes(6)) + chunk(b"PLTE", bytes([10, 200, 30]))
+        + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b"")
+    )  # fmt: skip
+    capfd.readouterr()
+    with pytest.warns(UserWarning, match="PLTE: out of place"):
+        got = read_image(p)
+    assert capfd.readouterr().err == ""
+    np.testing.assert_array_equal(got, np.broadcast_to([10, 200, 30], (2, 5, 3)))
