@@ -198,7 +198,8 @@ def test_pages_of_different_sizes_are_frames(
         w.write(grey[:10, :10])
     with pytest.raises(InvalidInputError, match=r"multi-page TIFF of 3 images of different si"):
         read_image(p)
-    with pytest.raises(InvalidInputError, match=r"20 x 30 px uint8, 16 x 12 px uint8, 10 x 10"):
+    sizes = r"20 x 30 px, 1 channel\(s\), uint8; 16 x 12 px, 3 channel\(s\), uint8; 10 x 10"
+    with pytest.raises(InvalidInputError, match=sizes):
         image_info(p)
     from imageform.io import image_frames
 

@@ -515,13 +515,14 @@ def _tiff_pick(tif: Any, path: Path, frame: int | None) -> tuple[Any, int | None
     counts = [_series_count(s) for s in images]
     total = sum(counts)
     if frame is None:
-        sizes = ", ".join(
+        sizes = "; ".join(
             (f"{n} x " if n > 1 else "")
-            + f"{s.shape[s.axes.index('X')]} x {s.shape[s.axes.index('Y')]} px "
+            + f"{s.shape[s.axes.index('X')]} x {s.shape[s.axes.index('Y')]} px, "
+            + f"{s.shape[s.axes.index('S')] if 'S' in s.axes else 1} channel(s), "
             + ("bilevel" if s.dtype == np.bool_ else str(s.dtype))
             for s, n in zip(images[:6], counts, strict=False)
             if "X" in s.axes and "Y" in s.axes
-        ) + (", ..." if len(images) > 6 else "")
+        ) + ("; ..." if len(images) > 6 else "")
         raise UnreadableFileError(
             path,
             f"a multi-page TIFF of {total} images of different sizes or types ({sizes}); read "
