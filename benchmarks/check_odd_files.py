@@ -355,11 +355,14 @@ def _reference(path: Path) -> np.ndarray | None:
     """The upright pixels by another decoder, chosen by the file's bytes (not its suffix).
 
     PNG: OpenCV (libpng, every bit depth) turned by the eXIf orientation; TIFF: tifffile and
-    the TIFF 6.0 rules; .npy: NumPy; BMP, GIF, WebP: OpenCV; PFM and Radiance HDR: OpenCV
-    (:func:`_float_reference`); anything else: Pillow with ``exif_transpose`` (a CMYK JPEG
-    with a CMYK ICC profile converted by ImageCms to sRGB; an ICO's largest entry).
+    the TIFF 6.0 rules; DICOM: pydicom's modality values (:func:`_dicom_reference`); .npy:
+    NumPy; BMP, GIF, WebP: OpenCV; PFM and Radiance HDR: OpenCV (:func:`_float_reference`);
+    anything else: Pillow with ``exif_transpose`` (a CMYK JPEG with a CMYK ICC profile
+    converted by ImageCms to sRGB; an ICO's largest entry).
     """
-    head = path.read_bytes()[:16]
+    head = path.read_bytes()[:132]
+    if head[128:132] == b"DICM":
+        return _dicom_reference(path)
     if head.startswith(b"\x93NUMPY"):
         return np.load(path)
     if head[:2] in (b"PF", b"Pf") or head.startswith((b"#?RADIANCE", b"#?RGBE")):
@@ -388,6 +391,26 @@ def _reference(path: Path) -> np.ndarray | None:
         elif up.mode in ("CMYK", "YCbCr", "1"):
             up = up.convert("RGB" if up.mode != "1" else "L")
         return np.asarray(up)
+
+
+def _dicom_reference(path: Path) -> np.ndarray | None:
+    """A DICOM's modality values by pydicom (``apply_modality_lut(pixel_array)``).
+
+    None (no reference) for a file of several frames (imageform refuses it without a frame)
+    and for MONOCHROME1, which imageform inverts to MONOCHROME2's sense.
+    """
+    import pydicom
+    from pydicom.pixels import apply_modality_lut
+
+    ds = pydicom.dcmread(path)
+    if int(getattr(ds, "NumberOfFrames", 1) or 1) > 1:
+        return None
+    if str(getattr(ds, "PhotometricInterpretation", "")) == "MONOCHROME1":
+        return None
+    arr = np.asarray(ds.pixel_array)
+    if arr.ndim == 2:
+        arr = np.asarray(apply_modality_lut(arr, ds))
+    return arr
 
 
 def _float_reference(path: Path) -> np.ndarray:
@@ -527,9 +550,13 @@ def _check_read(path: Path) -> tuple[str, str]:
         return "fine", f"{got.shape} {got.dtype}"
     ref = ref[..., None] if ref.ndim == 2 else ref
     ref = ref.astype(np.float32) if ref.dtype == np.float16 else ref  # widened, as documented
-    if ref.dtype.kind == "i" and ref.dtype.itemsize <= 4 and got.dtype.kind == "f":
-        # a TIFF's signed samples: their numbers as floats (float64 for int32), documented
+    numbers = (ref.dtype.kind == "i" and ref.dtype.itemsize <= 4) or ref.dtype == np.uint32
+    if numbers and got.dtype.kind == "f":
+        # a TIFF's signed or uint32 samples: their numbers as floats (float64 for 32 bits),
+        # documented
         ref = ref.astype(np.float32 if ref.dtype.itemsize <= 2 else np.float64)
+    if ref.dtype.kind == "f" and got.dtype.kind == "f" and ref.dtype != got.dtype:
+        ref = ref.astype(got.dtype)  # a DICOM's modality values (pydicom: float64)
     if ref.shape[:2] != got.shape[:2]:
         return "wrong", f"read {got.shape[:2]}, upright reference {ref.shape[:2]}"
     if ref.dtype != got.dtype:

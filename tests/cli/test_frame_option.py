@@ -109,3 +109,60 @@ def test_a_stack_frame_through_two_commands_is_that_page(
     assert main([*argv, str(page2), "-o", str(wb)]) == 0
     np.testing.assert_array_equal(read_image(wa), read_image(wb))
     capsys.readouterr()
+
+
+def test_a_raw_file_takes_frame_0_and_refuses_another(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``sfr`` and ``info`` of a raw file ignored ``--frame 3`` (they read the raw directly);
+    a raw holds one image: ``--frame 0`` is it, another is out of range as for a PNG. The
+    commands that read images, not raws, say in one line what to do with it."""
+    from imageform.analysis import render_sfr_chart
+    from imageform.io import write_dng
+
+    lin = render_sfr_chart((96, 120), grid=(1, 1), angle_deg=5.0, sigma=0.8, supersampling=2)
+    dn = np.round(64 + (4095 - 64) * 0.9 * lin).astype(np.uint16)
+    raw = write_dng(tmp_path / "edge.dng", dn, cfa_pattern="RGGB", black_level=64.0,
+                    white_level=4095.0, color_matrix=np.eye(3))  # fmt: skip
+    for argv in (["sfr", str(raw)], ["info", str(raw)]):
+        assert main([*argv, "--frame", "3"]) == 1
+        err = capsys.readouterr().err
+        assert f"frame 3 is out of range: {raw} holds one image (frame 0)" in err
+        assert err.count("\n") == 1
+    assert main(["info", str(raw), "--frame", "0"]) == 0
+    capsys.readouterr()
+    out = tmp_path / "o.png"
+    assert main(["cvd", str(raw), "--type", "deutan", "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert "is a camera raw file (.dng), not an image: make one with imageform develop" in err
+    assert err.count("\n") == 1 and not out.exists()
+
+
+def test_info_of_a_multi_frame_dicom_checks_frame(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``info x.dcm --frame 9`` described the file as if no frame were given."""
+    pydicom = pytest.importorskip("pydicom")
+    from pydicom.dataset import Dataset, FileMetaDataset
+    from pydicom.uid import ExplicitVRLittleEndian, generate_uid
+
+    ds = Dataset()
+    ds.file_meta = FileMetaDataset()
+    ds.file_meta.TransferSyntaxUID = ExplicitVRLittleEndian
+    ds.file_meta.MediaStorageSOPClassUID = "1.2.840.10008.5.1.4.1.1.7"
+    ds.file_meta.MediaStorageSOPInstanceUID = generate_uid()
+    ds.SOPClassUID = ds.file_meta.MediaStorageSOPClassUID
+    ds.SOPInstanceUID = ds.file_meta.MediaStorageSOPInstanceUID
+    ds.Modality = "OT"
+    ds.Rows, ds.Columns, ds.NumberOfFrames = 4, 5, 3
+    ds.SamplesPerPixel, ds.PhotometricInterpretation = 1, "MONOCHROME2"
+    ds.BitsAllocated, ds.BitsStored, ds.HighBit, ds.PixelRepresentation = 8, 8, 7, 0
+    ds.PixelData = np.arange(60, dtype=np.uint8).tobytes()
+    p = tmp_path / "cine.dcm"
+    ds.save_as(p, enforce_file_format=True)
+    assert pydicom.dcmread(p).NumberOfFrames == 3
+    assert main(["info", str(p), "--frame", "9"]) == 1
+    err = capsys.readouterr().err
+    assert "frame 9 is out of range" in err and err.count("\n") == 1
+    assert main(["info", str(p), "--frame", "2"]) == 0
+    assert "frame 2 of 3" in capsys.readouterr().out

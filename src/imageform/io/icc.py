@@ -84,7 +84,8 @@ class DeclaredColorSpace(NamedTuple):
     when the file declares nothing or a profile imageform does not recognise; a TIFF that
     :func:`~imageform.io.write_image` wrote in a space without a profile names that space
     (``lab``, ``xyz`` ...). ``source``: ``icc``, ``png-srgb``, ``png-gama`` / ``png-chrm`` (a
-    PNG's ``gAMA`` and ``cHRM`` chunks), ``nclx`` (HEIF's H.273 code points), ``exif``,
+    PNG's ``gAMA`` and ``cHRM`` chunks), ``png-cicp`` (a PNG's ``cICP`` chunk), ``nclx``
+    (HEIF's H.273 code points), ``exif``,
     ``tiff-description`` (``imageform_color_space`` in a TIFF's ImageDescription JSON),
     ``radiance`` (a Radiance HDR file: linear RGB, its ``PRIMARIES``) or ``none``.
     ``description``: the profile's own description (``""`` without one).

@@ -13,8 +13,11 @@ One rule for every format:
   TIFF or ``.npy`` comes back as ``(H, W, 1)``).
 - **Values**: integers as stored (uint8 / uint16, full-range encoded values), floats as stored
   (float16 is widened to float32). A TIFF's signed integers (int8, int16, int32: a CT's or a
-  microscope's numbers) come as floats holding each stored number exactly, float32 (float64
-  for int32), as a DICOM's signed samples do. Other sample types are refused. A TIFF's
+  microscope's numbers) and uint32 (a photon counter's) come as floats holding each stored
+  number exactly, float32 (float64 for int32 and uint32), as a DICOM's signed samples do.
+  Other sample types are refused, by :func:`image_info` as by :func:`read_image`: a TIFF's
+  complex samples (SampleFormat 5 or 6; a complex number is no image: save its magnitude or
+  real part) and 64-bit integers in one line saying so. A TIFF's
   samples are read as the values they mean: a palette through its colour map (RGB), a
   bilevel image as 0/255, WhiteIsZero inverted; a CMYK TIFF as sRGB through its embedded
   CMYK ICC profile (LittleCMS, 8 and 16 bits; without one refused), a Lab or raw-YCbCr TIFF
@@ -24,7 +27,8 @@ One rule for every format:
   sensor's numbers (DN), as tifffile and scikit-image read them: measurements (``emva``,
   ``characterize``) need them so;
   such an image looks dark until scaled by ``65535 / (2**bits - 1)``.
-- **One image**: a TIFF holding a stack (pages, time points, z-planes) and an animated GIF or
+- **One image**: a TIFF holding a stack (pages, time points, z-planes; a plain multi-page
+  TIFF whose pages differ in size or type too, thumbnails aside) and an animated GIF or
   WebP are refused in one line saying what they hold and how to pick one, rather than read as
   their first image; ``frame=N`` reads image ``N`` (:func:`image_frames` counts them). A TIFF
   of more than 4 samples per pixel (multispectral bands) is refused, by :func:`image_info` as
@@ -92,6 +96,7 @@ import numpy as np
 
 from imageform import _deprecate
 from imageform._files import (
+    RAW_SUFFIXES,
     atomic_write,
     check_writable,
     final_name,
@@ -349,6 +354,13 @@ def _suffix_format(path: str | Path) -> str:
                     return "dicom"
         except (OSError, ValueError):  # a missing file, a name with NUL ...
             pass
+        suffix = Path(path).suffix.lower()
+        if suffix in RAW_SUFFIXES:  # read by develop, not as an image
+            raise InvalidInputError(
+                f"{shorten(Path(path))} is a camera raw file ({suffix}), not an image: make "
+                "one with imageform develop (sfr, characterize, emva and info read raw files "
+                "as they are; in Python imageform.io.read_raw)"
+            ) from None
         raise
 
 
@@ -463,11 +475,78 @@ def _check_frame(path: Path, frame: object, count: int) -> int:
     return int(frame)
 
 
-def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, ImageInfo]:
-    """Return the first series of a TIFF and what one image of it is (a stack needs frame)."""
+#: tifffile's series kinds of a plain multi-page TIFF: pages as written (``generic``) or
+#: with tifffile's own shape metadata (``shaped``: one series per ``imwrite`` call).
+_PLAIN_SERIES = ("generic", "shaped")
+
+
+def _tiff_images(tif: Any) -> list[Any]:
+    """Return the series of a TIFF that are images of their own, the first first.
+
+    A plain multi-page TIFF (tifffile's generic or shaped series: a fax, a scan of several
+    sheets, a page per size) whose pages differ in size or sample type is several series; each is an
+    image (or a stack of them) as a stack's pages are. Reduced-resolution pages (thumbnails,
+    NewSubfileType 1) and transparency masks (4) are not. A slide scanner's, OME or ImageJ
+    TIFF is its first series (its other series are a label, a macro photograph, a thumbnail).
+    """
+    first = tif.series[0]
+    if first.kind not in _PLAIN_SERIES:
+        return [first]
+    return [first] + [
+        s for s in tif.series[1:]
+        if s.kind in _PLAIN_SERIES and not int(getattr(s.keyframe, "subfiletype", 0) or 0) & 5
+    ]  # fmt: skip
+
+
+def _series_count(series: Any) -> int:
+    """Count the images one TIFF series holds (its axes but Y, X, samples; 1 if none)."""
+    return math.prod(n for _, n in _stack_axes(series.axes, series.shape))
+
+
+def _tiff_pick(tif: Any, path: Path, frame: int | None) -> tuple[Any, int | None]:
+    """Return the series holding image ``frame`` of a TIFF and the frame within that series.
+
+    A TIFF of several images of their own (:func:`_tiff_images`) without ``frame`` is
+    refused in one line naming their sizes; ``frame`` counts over them in the file's order.
+    """
+    images = _tiff_images(tif)
+    if len(images) == 1:
+        return images[0], frame
+    counts = [_series_count(s) for s in images]
+    total = sum(counts)
+    if frame is None:
+        sizes = "; ".join(
+            (f"{n} x " if n > 1 else "")
+            + f"{s.shape[s.axes.index('X')]} x {s.shape[s.axes.index('Y')]} px, "
+            + f"{s.shape[s.axes.index('S')] if 'S' in s.axes else 1} channel(s), "
+            + ("bilevel" if s.dtype == np.bool_ else str(s.dtype))
+            for s, n in zip(images[:6], counts, strict=False)
+            if "X" in s.axes and "Y" in s.axes
+        ) + ("; ..." if len(images) > 6 else "")
+        raise UnreadableFileError(
+            path,
+            f"a multi-page TIFF of {total} images of different sizes or types ({sizes}); read "
+            f"one with frame=N, 0 to {total - 1} (imageform's commands: --frame N)",
+        )
+    index = _check_frame(path, frame, total)
+    for s, n in zip(images, counts, strict=True):
+        if index < n:
+            return s, (index if n > 1 else None)
+        index -= n
+    raise AssertionError("unreachable: frame checked against the total")
+
+
+def _tiff_series(
+    tif: Any, path: Path, frame: int | None = None
+) -> tuple[Any, ImageInfo, int | None]:
+    """Return the series of a TIFF holding its image, what one image of it is, the inner frame.
+
+    ``frame`` picks one of several images (a stack's, or a multi-page file's); the frame
+    returned is the index within the series picked (None where it holds one image).
+    """
     if not tif.series:
         raise UnreadableFileError(path, "the TIFF holds no image")
-    series = tif.series[0]
+    series, frame = _tiff_pick(tif, path, frame)
     axes = series.axes
     shape = series.shape
     if "Y" not in axes or "X" not in axes:
@@ -480,6 +559,7 @@ def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, I
         _check_frame(path, frame, math.prod(n for _, n in stack))
     channels = shape[axes.index("S")] if "S" in axes else 1
     page = _frame_page(tif, series, frame)
+    _refuse_tiff_samples(path, series.dtype, page)
     if channels in (4, 5) and _tiff_cmyk_profile(page) is not None:  # read as sRGB (+ alpha)
         channels -= 1
     if channels > 4:  # refused here, so that image_info says what read_image does
@@ -492,14 +572,16 @@ def _tiff_series(tif: Any, path: Path, frame: int | None = None) -> tuple[Any, I
         )
     width, height = shape[axes.index("X")], shape[axes.index("Y")]
     dtype = "uint8" if series.dtype == np.bool_ else str(series.dtype)  # bilevel: 0/255
-    if series.dtype.kind == "i" and series.dtype.itemsize <= 4:  # signed: floats, as stored
-        dtype = str(_signed_as_float(series.dtype))
+    if _read_as_numbers(series.dtype):  # int8/16/32, uint32: floats, each number as stored
+        dtype = str(_numbers_as_float(series.dtype))
+    elif series.dtype == np.float16:  # widened, as read_image returns it
+        dtype = "float32"
     if int(page.photometric) == 3 and page.colormap is not None:  # palette: RGB, as read
         cmap = np.asarray(page.colormap)
         eight = int(cmap.max(initial=0)) < 256 or not np.any(cmap % 257)
         channels, dtype = 3, "uint8" if eight else "uint16"
     info = ImageInfo(width, height, channels, dtype, "tiff")
-    return series, info
+    return series, info, frame
 
 
 def image_frames(path: str | Path) -> ImageFrames:
@@ -532,8 +614,11 @@ def image_frames(path: str | Path) -> ImageFrames:
     if fmt == "tiff":
         try:
             with _tifffile().TiffFile(p) as tif:
-                if tif.series:
-                    axes = _stack_axes(tif.series[0].axes, tif.series[0].shape)
+                images = _tiff_images(tif) if tif.series else []
+                if len(images) > 1:  # pages of different sizes or types
+                    axes = (("pages", sum(_series_count(s) for s in images)),)
+                elif images:
+                    axes = _stack_axes(images[0].axes, images[0].shape)
         except Exception as exc:
             raise UnreadableFileError(p, f"{_one_line(exc)}") from None
     elif fmt == "dicom":
@@ -555,20 +640,25 @@ def image_frames(path: str | Path) -> ImageFrames:
 
 
 def pixel_size_um(path: str | Path) -> tuple[float, float] | None:
-    r"""Return the pixel size in micrometres (x, y) a microscopy file states, or None.
+    r"""Return the pixel size in micrometres (x, y) a microscopy or X-ray file states, or None.
 
     As OpenSlide reads it (its ``openslide.mpp-x`` / ``mpp-y``), of the full-resolution
     level:
 
-    - OME-XML ``PhysicalSizeX`` / ``PhysicalSizeY`` in µm (Bio-Formats, QuPath's exports);
+    - OME-XML ``PhysicalSizeX`` / ``PhysicalSizeY`` (Bio-Formats, QuPath's exports), in
+      their unit (µm by default; nm, mm, cm, m);
     - an Aperio SVS header's ``MPP = ...``;
     - a Philips TIFF's ``DICOM_PIXEL_SPACING`` (mm, rows then columns: the first of its
       pixel data representation sequence, the full resolution);
     - a Ventana BIF's ``ScanRes`` in its XMP ``iScan`` element (µm);
-    - an ImageJ TIFF's resolution with ``unit=micron`` (or µm, um) in its description;
+    - an ImageJ TIFF's resolution with ``unit=micron`` (µm, um, nm, mm, cm, m; not inch)
+      in its description;
     - else the TIFF resolution tags in pixels per centimetre (Hamamatsu NDPI, QPTIFF,
-      libvips, tifffile and imageform's own pyramids) when they give under 100 µm: photo
-      software writes 72 dpi (353 µm) to any file, and in inches (never read);
+      libvips, tifffile and imageform's own pyramids; an X-ray detector's or a macro
+      camera's 50-400 µm) when they give under 1000 µm and are not a screen's 72 or 96 dpi
+      converted (352.8 and 264.6 µm: photo software writes those to any file; libvips writes
+      1000 µm to a file of unknown resolution); in inches they are never read (every
+      photograph states 72 or 300 dpi);
     - a DICOM slide-microscopy image's Pixel Spacing (mm, modality SM).
 
     Other formats: None.
@@ -603,7 +693,10 @@ def pixel_size_um(path: str | Path) -> tuple[float, float] | None:
             res = _resolution(page)
     except Exception:
         return None
-    return _stated_microns(desc, xmp_text, res)
+    um = _stated_microns(desc, xmp_text, res)
+    if um is None or not all(math.isfinite(v) and v > 0 for v in um):  # 0: not stated
+        return None
+    return um
 
 
 def _tag_text(value: Any) -> str:
@@ -625,9 +718,37 @@ def _resolution(page: Any) -> tuple[float, float, int] | None:
     return xr[0] / xr[1], yr[0] / yr[1], unit
 
 
-#: The largest pixel a resolution tag in centimetres is read as (µm): microscopes and slide
-#: scanners image at 0.1-50 µm; 72 dpi (photo software's default) is 353 µm.
-_MAX_TAG_MICRONS = 100.0
+#: The largest pixel (µm, exclusive) a TIFF's resolution tags in centimetres are read as: a
+#: microscope's 0.1-50 µm, a macro photograph's or an X-ray detector's 50-200 µm, a binned
+#: fluoroscopy panel's 300-400 µm. libvips writes 10 px/cm (1 px/mm, 1000 µm) to a file of
+#: unknown resolution, and other writers 1 px/cm: neither is a pixel size.
+_MAX_TAG_MICRONS = 1000.0
+#: Screen resolutions photo and office software write to any file (72 and 96 dpi), in the
+#: pixels per centimetre some of them store (352.8 and 264.6 µm): not a pixel size.
+_SCREEN_DPI = (72.0, 96.0)
+#: Micrometres per unit of OME's PhysicalSize units and ImageJ's ``unit=`` (its spellings).
+_MICRONS_PER_UNIT = {"nm": 1e-3, "µm": 1.0, "um": 1.0, "\u03bcm": 1.0, "micron": 1.0,
+                     "microns": 1.0, "mm": 1e3, "cm": 1e4, "m": 1e6}  # fmt: skip
+#: TIFF ResolutionUnit (3 cm; 4 mm and 5 µm, tifffile's extensions) in µm.
+_RESOLUTION_UNIT_MICRONS = {3: 1e4, 4: 1e3, 5: 1.0}
+
+
+def _tag_microns(res: tuple[float, float, int]) -> tuple[float, float] | None:
+    """Return the pixel size (µm) of TIFF resolution tags in a metric unit, else None.
+
+    Inches are never read (every photograph states 72 or 300 dpi); centimetres are read
+    below :data:`_MAX_TAG_MICRONS`, unless they are a screen's 72 or 96 dpi converted.
+    """
+    per = _RESOLUTION_UNIT_MICRONS.get(res[2])
+    if per is None:
+        return None
+    x, y = per / res[0], per / res[1]
+    if not (0.0 < x < _MAX_TAG_MICRONS and 0.0 < y < _MAX_TAG_MICRONS):
+        return None
+    screen = (25400.0 / dpi for dpi in _SCREEN_DPI)
+    if any(abs(x - s) < 1e-3 * s and abs(y - s) < 1e-3 * s for s in screen):
+        return None
+    return x, y
 
 
 def _stated_microns(
@@ -643,11 +764,14 @@ def _stated_microns(
     xs = re.search(r'PhysicalSizeX="' + number + '"', desc)
     if xs:
         ys = re.search(r'PhysicalSizeY="' + number + '"', desc)
-        units = re.findall(r'PhysicalSize[XY]Unit="([^"]*)"', desc)
-        if any(u not in ("µm", "um", "\u00b5m", "\u03bcm") for u in units):
+        ux = re.search(r'PhysicalSizeXUnit="([^"]*)"', desc)
+        uy = re.search(r'PhysicalSizeYUnit="([^"]*)"', desc)
+        kx = _MICRONS_PER_UNIT.get(ux.group(1) if ux else "µm")  # OME's default: µm
+        ky = _MICRONS_PER_UNIT.get(uy.group(1) if uy else "µm")
+        if kx is None or ky is None:
             return None
-        x = float(xs.group(1))
-        return x, float(ys.group(1)) if ys else x
+        x = float(xs.group(1)) * kx
+        return x, float(ys.group(1)) * ky if ys else x
     if "DPUfsImport" in desc[:2000]:  # Philips: DICOM_PIXEL_SPACING "row" "column" in mm
         q = r'\s*(?:&quot;|")'
         found = list(
@@ -665,13 +789,10 @@ def _stated_microns(
     if desc.startswith("ImageJ=") and res is not None:
         m = re.search(r"^unit=(.*)$", desc, re.MULTILINE)
         unit = m.group(1).strip().replace("\\u00B5", "µ") if m else ""
-        if unit in ("micron", "microns", "um", "µm", "\u03bcm"):
-            return 1.0 / res[0], 1.0 / res[1]
-        return None
-    if res is not None and res[2] == 3:  # pixels per centimetre
-        x, y = 1e4 / res[0], 1e4 / res[1]
-        if x < _MAX_TAG_MICRONS and y < _MAX_TAG_MICRONS:
-            return x, y
+        k = _MICRONS_PER_UNIT.get(unit)  # not inch, pixel
+        return (k / res[0], k / res[1]) if k is not None else None
+    if res is not None:
+        return _tag_microns(res)
     return None
 
 
@@ -727,8 +848,8 @@ def image_info(path: str | Path, *, frame: int | None = None) -> ImageInfo:
         tifffile = _tifffile()
         try:
             with tifffile.TiffFile(p) as tif:
-                head = _tiff_series(tif, p, frame)[1]
-                tag = tif.pages[0].tags.get(274)
+                series, head, inner = _tiff_series(tif, p, frame)
+                tag = _frame_page(tif, series, inner).tags.get(274)
                 return _upright(head, int(tag.value) if tag is not None else 1)
         except InvalidInputError:
             raise
@@ -1102,7 +1223,7 @@ def _read_png(p: Path, limit: int) -> np.ndarray:
     try:
         # Adam7-interlaced (IHDR's last byte): libpng warns of imagecodecs' call; an eXIf
         # chunk libpng finds invalid: it says so on stderr (the pixels are fine)
-        quiet = data[28] == 1 or _png_has_chunk(data, b"eXIf")
+        quiet = data[28] == 1 or _png_has_chunk(data, b"eXIf") or _png_out_of_order(data)
         decode = _png_decode_interlaced if quiet else imagecodecs.png_decode
         arr = decode(data)
     except Exception as exc:
@@ -1111,6 +1232,34 @@ def _read_png(p: Path, limit: int) -> np.ndarray:
 
 
 _stderr_lock = threading.Lock()
+
+
+#: Chunks PNG places before PLTE (colour space, significant bits: PNG 3rd ed. table 7), and
+#: those it places after it (transparency, background, histogram).
+_PNG_BEFORE_PLTE = (b"cHRM", b"gAMA", b"iCCP", b"sBIT", b"sRGB", b"cICP")
+_PNG_AFTER_PLTE = (b"tRNS", b"bKGD", b"hIST")
+
+
+def _png_out_of_order(data: bytes) -> bool:
+    """Whether a PNG's chunks before its image data break PNG's order around PLTE.
+
+    libpng then says "PLTE: out of place" (libavif's ``circle-trns-before-plte.png``: tRNS
+    before PLTE) or "gAMA: out of place" on stderr, a second line beside a command's one,
+    and decodes the pixels as they are: such a file is decoded with its notes as warnings.
+    """
+    pos, seen = len(_PNG_SIGNATURE), []
+    while pos + 8 <= len(data):
+        length, kind = struct.unpack(">I4s", data[pos : pos + 8])
+        if kind in (b"IDAT", b"IEND"):
+            break
+        seen.append(kind)
+        pos += 12 + length
+    if b"PLTE" not in seen:
+        return False
+    at = seen.index(b"PLTE")
+    return any(k in _PNG_AFTER_PLTE for k in seen[:at]) or any(
+        k in _PNG_BEFORE_PLTE for k in seen[at + 1 :]
+    )
 
 
 def _png_has_chunk(data: bytes, kind: bytes) -> bool:
@@ -1126,6 +1275,30 @@ def _png_has_chunk(data: bytes, kind: bytes) -> bool:
     return False
 
 
+def _png_cicp(p: Path) -> tuple[int, int, int, int] | None:
+    """Return a PNG's ``cICP`` chunk (H.273 primaries, transfer, matrix, full range) or None.
+
+    PNG 3rd ed. sec. 11.3.2.6: the chunk comes before the image data; a decoder that knows it
+    ignores ``iCCP``, ``sRGB``, ``gAMA`` and ``cHRM`` (sec. 4.3). The chunk headers are read
+    one by one (seeking past each body), not the file.
+    """
+    with p.open("rb") as fh:
+        fh.seek(len(_PNG_SIGNATURE))
+        while True:
+            head = fh.read(8)
+            if len(head) < 8:
+                return None
+            length, kind = struct.unpack(">I4s", head)
+            if kind in (b"IDAT", b"IEND"):
+                return None
+            if kind == b"cICP":
+                body = fh.read(length)
+                if length != 4 or len(body) != 4:
+                    return None
+                return body[0], body[1], body[2], body[3]
+            fh.seek(length + 4, os.SEEK_CUR)
+
+
 def _png_decode_interlaced(data: bytes) -> Any:
     """Decode an interlaced PNG, or one with an eXIf chunk, without libpng's notes.
 
@@ -1133,17 +1306,37 @@ def _png_decode_interlaced(data: bytes) -> Any:
     Interlace handling should be turned on when using png_read_image" onto ``sys.stderr``
     (the pixels are right: PngSuite's interlaced images equal OpenCV's decoding), a second
     line beside a command's one. That line is dropped; any other libpng message becomes a
-    warning (libpng's "eXIf: invalid" for an EXIF block it cannot parse, which the pixels
-    do not need). ``sys.stderr`` is swapped for the decode (interlaced PNGs only), under a lock.
+    warning (libpng's "eXIf: invalid" for an EXIF block it cannot parse, "PLTE: out of place"
+    for chunks out of PNG's order, which the pixels do not need). imagecodecs logs them
+    (its ``imagecodecs`` logger, which without a handler prints onto ``sys.stderr``): the
+    logger's records and ``sys.stderr`` are both taken for the decode (these PNGs only),
+    under a lock.
     """
     import contextlib
     import io
+    import logging
 
     import imagecodecs
 
+    class _Taken(logging.Handler):
+        def __init__(self) -> None:
+            super().__init__()
+            self.lines: list[str] = []
+
+        def emit(self, record: logging.LogRecord) -> None:
+            self.lines.append(record.getMessage())
+
+    taken = _Taken()
+    logger = logging.getLogger("imagecodecs")
     with _stderr_lock, contextlib.redirect_stderr(io.StringIO()) as said:
-        arr = imagecodecs.png_decode(data)
-    for line in said.getvalue().splitlines():
+        propagate, logger.propagate = logger.propagate, False
+        logger.addHandler(taken)
+        try:
+            arr = imagecodecs.png_decode(data)
+        finally:
+            logger.removeHandler(taken)
+            logger.propagate = propagate
+    for line in [*taken.lines, *said.getvalue().splitlines()]:
         if line.strip() and "Interlace handling should be turned on" not in line:
             warnings.warn(line.strip(), stacklevel=4)
     return arr
@@ -1253,11 +1446,12 @@ def _frame_page(tif: Any, series: Any, frame: int | None) -> Any:
     takes that page's. A page tifffile loads as a TiffFrame (no tags of its own) is described
     by its key frame.
     """
+    first = tif.pages[0] if series is tif.series[0] else series.keyframe
     if frame is None or not frame:
-        return tif.pages[0]
+        return first
     stack = [n for a, n in zip(series.axes, series.shape, strict=True) if a not in "YXS"]
     if len(series.pages) != math.prod(stack):
-        return tif.pages[0]
+        return first
     page = series.pages[frame]
     return page if hasattr(page, "tags") else series.keyframe
 
@@ -1284,20 +1478,58 @@ def _tiff_frame(series: Any, path: Path, frame: int | None) -> tuple[np.ndarray,
     return whole[tuple(next(pick) if a not in "YXS" else slice(None) for a in axes)], plane
 
 
-def _signed_as_float(dtype: Any) -> np.dtype[Any]:
-    """Return the float type a TIFF's signed integer samples are read as: each number exactly.
+def _read_as_numbers(dtype: Any) -> bool:
+    """Whether a TIFF's integer samples are read as floats holding the numbers.
 
-    float32 holds int8 and int16 exactly, float64 int32 (float32's 24-bit mantissa does
-    not), as a DICOM's signed samples come as float32, float64 beyond 24 stored bits.
+    int8, int16, int32 (signed) and uint32 (beyond uint16, the widest integer an image
+    comes as).
+    """
+    dt = np.dtype(dtype)
+    return (dt.kind == "i" and dt.itemsize <= 4) or dt == np.uint32
+
+
+def _numbers_as_float(dtype: Any) -> np.dtype[Any]:
+    """Return the float type a TIFF's int8/16/32 or uint32 samples are read as: each exactly.
+
+    float32 holds int8 and int16 exactly, float64 int32 and uint32 (float32's 24-bit
+    mantissa does not), as a DICOM's signed samples come as float32, float64 beyond 24
+    stored bits.
     """
     return np.dtype(np.float32 if np.dtype(dtype).itemsize <= 2 else np.float64)
+
+
+def _refuse_tiff_samples(path: Path, dtype: Any, page: Any) -> None:
+    """Refuse, in one line, a TIFF whose samples are no image's: complex, 64-bit integers.
+
+    A complex sample (SampleFormat 5 or 6: a radar's SLC, a Fourier transform, an MR's
+    k-space) is two numbers; which one is an image (its magnitude, phase, real part) is the
+    caller's choice. 64-bit integers do not fit a float64 exactly.
+    """
+    dt = np.dtype(dtype)
+    if dt.kind == "c":
+        fmt = int(getattr(page, "sampleformat", 6) or 6)
+        bits = int(getattr(page, "bitspersample", 8 * dt.itemsize) or 8 * dt.itemsize) // 2
+        part = f"int{bits}" if fmt == 5 else f"float{bits}"
+        raise UnreadableFileError(
+            path,
+            f"a TIFF of complex {part} samples (SampleFormat {fmt}: a radar's, a Fourier "
+            "transform's or k-space's values); a complex number is not an image: save the "
+            "part you mean as a float TIFF and read that, e.g. "
+            "tifffile.imwrite(out, numpy.abs(tifffile.imread(in))) (or .real, numpy.angle)",
+        )
+    if dt.kind in "iu" and dt.itemsize > 4:
+        raise UnreadableFileError(
+            path,
+            f"a TIFF of {dt} samples; imageform reads integers of 8 to 32 bits (uint32 and "
+            "int32 as float64, exact): save it as float64 or a narrower integer first",
+        )
 
 
 def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarray, bool]:
     tifffile = _tifffile()
     try:
         with tifffile.TiffFile(p) as tif:
-            series, info = _tiff_series(tif, p, frame)
+            series, info, frame = _tiff_series(tif, p, frame)
             _check_pixels(p, info, limit)
             page = _frame_page(tif, series, frame)
             tag = page.tags.get(274)
@@ -1322,8 +1554,8 @@ def _read_tiff(p: Path, limit: int, frame: int | None = None) -> tuple[np.ndarra
     if cmyk is not None:
         return _orient(_tiff_cmyk_to_rgb(p, arr, cmyk), orientation), extra > 0
     arr = _tiff_samples(p, arr, photometric, bits, colormap)
-    if arr.dtype.kind == "i" and arr.dtype.itemsize <= 4:  # int8/16/32: the numbers, as floats
-        arr = arr.astype(_signed_as_float(arr.dtype))
+    if _read_as_numbers(arr.dtype):  # int8/16/32, uint32: the numbers, as floats
+        arr = arr.astype(_numbers_as_float(arr.dtype))
     return _orient(arr, orientation), extra > 0
 
 
@@ -1977,7 +2209,10 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
     :func:`identify_icc` (a CMYK JPEG's CMYK profile: ``srgb``, what :func:`read_image`
     converts it to); HEIF's ``nclx`` colour description (H.273 code points:
     BT.709/sRGB, Display P3 or BT.2020 primaries with the sRGB, BT.709 or a
-    linear transfer); PNG's ``sRGB`` chunk; PNG's ``gAMA`` and ``cHRM`` chunks (gAMA
+    linear transfer); a PNG's ``cICP`` chunk before all of these (PNG 3rd ed.: it overrides
+    ``iCCP``, ``sRGB``, ``gAMA``, ``cHRM``; the same code points, source ``png-cicp``; PQ,
+    HLG or a BT.470 gamma give ``name`` None with the code points described); PNG's ``sRGB``
+    chunk; PNG's ``gAMA`` and ``cHRM`` chunks (gAMA
     1/2.2 within 5 % is sRGB's curve, 1.0 a ``linear_`` space; source ``png-gama`` or
     ``png-chrm``; a gamma or primaries of no space give ``name`` None with the chunks
     described); EXIF ``ColorSpace`` 1 (sRGB), or
@@ -2065,6 +2300,12 @@ def image_color_space(path: str | Path) -> DeclaredColorSpace:
         if recorded is not None:
             return DeclaredColorSpace(recorded, "tiff-description", "")
         return DeclaredColorSpace(None, "none", "")
+    cicp = _png_cicp(p) if fmt == "png" else None
+    if cicp is not None:  # PNG 3rd ed.: it overrides iCCP, sRGB, gAMA and cHRM
+        prim, trc, matrix, full = cicp
+        text = f"cICP primaries {prim}, transfer {trc}, matrix {matrix}, full range {full}"
+        name = _NCLX.get((prim, trc)) if matrix == 0 and full == 1 else None
+        return DeclaredColorSpace(name, "png-cicp", text)
     try:
         with _pillow_open(p) as im:
             icc = im.info.get("icc_profile")

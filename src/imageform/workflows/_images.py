@@ -234,6 +234,16 @@ def read(
     return full_range(path, img) if colours else img
 
 
+def one_image_frame(path: Path, frame: int | None) -> None:
+    """Refuse ``--frame N`` (N > 0) for a file read as one image (a camera raw), in one line.
+
+    ``--frame 0`` is that image, as for a file of one image in ``read_image``; the words are
+    ``read_image``'s for a frame out of range.
+    """
+    if frame is not None and frame != 0:
+        raise InvalidInputError(f"frame {frame} is out of range: {path} holds one image (frame 0)")
+
+
 def tiff_sample_bits(path: Path) -> int | None:
     """Bits per sample of a TIFF's first page with integer samples, None for other files."""
     with open(path, "rb") as fh:
@@ -251,11 +261,12 @@ def tiff_sample_bits(path: Path) -> int | None:
         return None
 
 
-def tiff_signed_type(path: Path) -> str | None:
-    """``"int16"`` (int8, int32) for a TIFF of signed integer samples, else None.
+def tiff_number_type(path: Path) -> str | None:
+    """``"int16"`` (int8, int32, uint32) for a TIFF of samples read as numbers, else None.
 
-    ``read_image`` reads them as floats holding the stored numbers (float32; float64 for
-    int32), as a DICOM's signed samples: a CT's or a microscope's values, not colours.
+    ``read_image`` reads signed integers and uint32 as floats holding the stored numbers
+    (float32; float64 for int32 and uint32), as a DICOM's signed samples: a CT's, a
+    detector's or a microscope's values, not colours.
     """
     with open(path, "rb") as fh:
         if fh.read(4) not in (b"II*\0", b"MM\0*", b"II+\0", b"MM\0+"):
@@ -267,7 +278,19 @@ def tiff_signed_type(path: Path) -> str | None:
             dtype = tif.series[0].dtype if tif.series else None
     except Exception:  # read_image says what is wrong with it
         return None
-    return str(dtype) if dtype is not None and dtype.kind == "i" else None
+    if dtype is None:
+        return None
+    if (dtype.kind == "i" and dtype.itemsize <= 4) or (dtype.kind == "u" and dtype.itemsize == 4):
+        return str(dtype)
+    return None
+
+
+def stored_as(number_type: str | None) -> str:
+    """``imageform info``'s words on a TIFF read as numbers: `` (stored int16, signed: ...)``."""
+    if number_type is None:
+        return ""
+    signed = ", signed" if number_type.startswith("int") else ""
+    return f" (stored {number_type}{signed}: read as the numbers)"
 
 
 def full_range(path: Path, image: Any) -> Any:
@@ -525,6 +548,7 @@ def declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
                 "png-srgb": "its sRGB chunk",
                 "png-gama": f"its PNG gAMA/cHRM chunks ({declared.description})",
                 "png-chrm": f"its PNG cHRM chunk ({declared.description})",
+                "png-cicp": f"its PNG cICP chunk ({declared.description})",
                 "tiff-description": "its TIFF description (written by imageform)",
                 "radiance": "its Radiance HDR header (linear RGB)",
             }.get(declared.source, "its EXIF tags")
@@ -536,7 +560,7 @@ def declared_space(run: Run, image: Path, declared: Any, *, grey: bool) -> str:
             f"note: {image} carries an ICC profile imageform does not recognise "
             f"({declared.description or 'no description'}); read as srgb (--from overrides)"
         )
-    elif declared.source in ("png-gama", "png-chrm"):
+    elif declared.source in ("png-gama", "png-chrm", "png-cicp"):
         run.note(
             f"note: {image} declares {declared.description} in its PNG chunks, which no space "
             "imageform knows matches; read as srgb (--from overrides)"

@@ -23,11 +23,13 @@ from imageform.workflows._images import (
     image_out_renames,
     input_space,
     on_gpu,
+    one_image_frame,
     read,
     refuse_absent_device,
     refuse_unscaled_floats,
     rgb_space_or_auto,
-    tiff_signed_type,
+    stored_as,
+    tiff_number_type,
     write,
     write_mapped,
 )
@@ -354,10 +356,11 @@ def _refuse_unwindowed(image: Path, img: Any, frame: int | None) -> None:
     from imageform.io import image_info
 
     lo, hi = float(np.min(img)), float(np.max(img))
-    signed = tiff_signed_type(image) if lo < 0 or hi > 1 else None
-    if signed is not None:
+    numbers = tiff_number_type(image) if lo < 0 or hi > 1 else None
+    if numbers is not None:
+        what = "signed numbers" if numbers.startswith("int") else "numbers"
         raise InvalidInputError(
-            f"{image} holds {signed} samples (signed numbers, {lo:.6g} to {hi:.6g}: a "
+            f"{image} holds {numbers} samples ({what}, {lo:.6g} to {hi:.6g}: a "
             "detector's or a CT's values, not colours); scale them to [0, 1] first"
         )
     if (lo < 0 or hi > 1) and (
@@ -927,9 +930,12 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
     if Path(image).suffix.lower() in _RAW_SUFFIXES:
         from imageform.workflows.raw import raw_info
 
+        one_image_frame(image, opts.frame)  # a raw file holds one image
         return raw_info(image)
     if _is_dicom(image):
-        return _dicom_info(image)
+        if opts.frame is not None:  # in range, or refused as read_image refuses it
+            image_info(image, frame=opts.frame)
+        return _dicom_info(image, opts.frame)
     frames = image_frames(image)
     if frames.total > 1 and opts.frame is None:
         return _frames_info(image, frames)
@@ -958,21 +964,20 @@ def info(run: Run, opts: InfoOptions, *, out: None, image: Path) -> Result:
     space = declared.name or "not declared (read as sRGB)"
     if declared.name is None and declared.source == "icc":
         space = f"an ICC profile imageform does not recognise ({declared.description})"
-    elif declared.name is None and declared.source in ("png-gama", "png-chrm"):
+    elif declared.name is None and declared.source in ("png-gama", "png-chrm", "png-cicp"):
         space = f"PNG chunks no space of imageform matches ({declared.description}); read as sRGB"
-    elif declared.source in ("png-gama", "png-chrm"):
+    elif declared.source in ("png-gama", "png-chrm", "png-cicp"):
         space = f"{declared.name} ({declared.description})"
     how = {
         "none": "",
         "tiff-description": " (recorded by imageform in the TIFF's description)",
     }.get(declared.source, f" ({declared.source})")
     which = f" (frame {opts.frame} of {frames.total})" if frames.total > 1 else ""
-    signed = tiff_signed_type(image) if head.format == "tiff" else None
-    summary["stored_dtype"] = signed or head.dtype
-    stored_as = f" (stored {signed}, signed: read as the numbers)" if signed else ""
+    numbers = tiff_number_type(image) if head.format == "tiff" else None
+    summary["stored_dtype"] = numbers or head.dtype
     text = [
         f"{image}{which}: {head.format}, {head.width} x {head.height} px, {head.channels} "
-        f"channel(s), {head.dtype}{stored_as}",
+        f"channel(s), {head.dtype}{stored_as(numbers)}",
         f"colour space: {space}{how}",
     ]
     if orientation not in (None, 1):
@@ -1019,10 +1024,26 @@ def _frames_info(image: Path, frames: Any) -> Result:
         "frames": frames.total,
         "frame_axes": dict(frames.axes),
     }
+    numbers = tiff_number_type(image) if head.format == "tiff" else None
+    summary["stored_dtype"] = numbers or head.dtype
     last = frames.total - 1
+    # a multi-page TIFF's pages may differ (a fax page and a colour photograph): each's size
+    picked = range(frames.total) if frames.total <= 64 else (0, last)
+    heads = [head] + [image_info(image, frame=k) for k in picked if k]
+    summary["sizes_differ"] = len({(h.width, h.height, h.channels, h.dtype) for h in heads}) > 1
+    if summary["sizes_differ"]:
+        shown = "; ".join(
+            f"frame {k}: {h.width} x {h.height} px, {h.channels} channel(s), {h.dtype}"
+            for k, h in zip(picked, heads, strict=False)
+        )
+        each = f"of different sizes or types ({shown})"
+    else:
+        each = (
+            f"each {head.width} x {head.height} px, {head.channels} channel(s), "
+            f"{head.dtype}{stored_as(numbers)}"
+        )
     text = [
-        f"{image}: {head.format}, {frames.total} images ({what}), each {head.width} x "
-        f"{head.height} px, {head.channels} channel(s), {head.dtype}",
+        f"{image}: {head.format}, {frames.total} images ({what}), {each}",
         f"frames 0 to {last}, in the file's order; read one: imageform COMMAND --frame N, "
         "read_image(path, frame=N)",
     ]
@@ -1108,8 +1129,12 @@ def _is_dicom(image: Path) -> bool:
     return is_dicom_file(image)
 
 
-def _dicom_info(image: Path) -> Result:
-    """``imageform info`` of a DICOM file: the image, its modality values, window, spacing."""
+def _dicom_info(image: Path, frame: int | None = None) -> Result:
+    """``imageform info`` of a DICOM file: the image, its modality values, window, spacing.
+
+    ``frame``: the one ``--frame`` named (checked in range by the caller); the header
+    describes every frame alike.
+    """
     from imageform.io import dicom, dicom_info, image_color_space
 
     d = dicom_info(image)
@@ -1128,9 +1153,12 @@ def _dicom_info(image: Path) -> Result:
         "color_space_source": declared.source,
         "description": declared.description or None,
         "frames": d.frames,
+        "frame": frame,
         "dicom": d._asdict(),
     }
     frames = f", {d.frames} frames (read one: --frame N)" if d.frames > 1 else ""
+    if frame is not None and d.frames > 1:
+        frames = f", frame {frame} of {d.frames}"
     if tiles is not None:
         summary["tiles"] = {"count": d.frames, "organization": tiles.organization}
         frames = (

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from imageform.errors import InvalidInputError
-from imageform.workflows._images import ImageIn, read
+from imageform.workflows._images import ImageIn, one_image_frame, read
 from imageform.workflows._spec import Input, Output, Result, Run, Workflow, _describe, option
 
 __all__ = ["WORKFLOWS", "SfrOptions"]
@@ -198,6 +198,7 @@ def _edge_image(
         return _linear(img, transfer), None, transfer, pitch
     from imageform.sensor import equalize_cfa
 
+    one_image_frame(image, opts.frame)  # a raw file holds one image: --frame 0 or none
     # the raw branch of characterize's reader: black level removed, scaled to 1 at white
     im = _read_photo(image, {}, "linear", opts.max_pixels, None)
     if im.mosaic is None:  # a monochrome or linear raw: its linear values as they are
