@@ -146,7 +146,7 @@ class ReconstructOptions(Options):
         False,
         help="Equalize each frame's grey levels by CLAHE (8 x 8 tiles) before SIFT: an "
         "endoscope's dim parts, far from its light, then keep as many keypoints as the lit "
-        "ones.",
+        "ones (more points; check it against a run without it, with --camera).",
     )
 
     def check(self) -> None:
