@@ -222,7 +222,7 @@ def run_imageform(
         masks = [(~highlight_mask(f)) & (True if masks is None else masks) for f in frames]
     if ct == 0.01 and "contrast_threshold" in SETTINGS:
         ct = SETTINGS["contrast_threshold"]
-    kw = {key: SETTINGS[key] for key in ("window", "rng") if key in SETTINGS}
+    kw = {key: SETTINGS[key] for key in ("window", "rng", "equalize") if key in SETTINGS}
     try:
         rec = reconstruct_sequence(
             frames, cam.K, cam.distortion, masks=masks, contrast_threshold=ct, **kw

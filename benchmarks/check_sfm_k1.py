@@ -231,9 +231,15 @@ def read_frames(folder: Path) -> list[np.ndarray]:
     return [_decode(p.read_bytes()) for p in files]
 
 
-def run_cli(folder: Path, endoscope: bool, src: Path, camera: Path | None = None) -> dict[str, Any]:
+def run_cli(
+    folder: Path,
+    endoscope: bool,
+    src: Path,
+    camera: Path | None = None,
+    extra: tuple[str, ...] = (),
+) -> dict[str, Any]:
     """``python -m imageform reconstruct FRAMES`` without ``--camera`` (or with ``camera``),
-    ``src`` imported."""
+    ``src`` imported; ``extra``: more options."""
     from imageform.geometry import rvec_to_matrix
 
     env = os.environ.copy()
@@ -245,6 +251,7 @@ def run_cli(folder: Path, endoscope: bool, src: Path, camera: Path | None = None
             cmd += ["--auto-mask", "--contrast-threshold", "0.01"]
         if camera is not None:
             cmd += ["--camera", str(camera)]
+        cmd += list(extra)
         r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
         p = subprocess.run(cmd, capture_output=True, text=True, env=env)

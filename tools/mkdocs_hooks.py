@@ -124,6 +124,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "sfm-inliers": "benchmarks/check_sfm_inliers.py",
     "sfm-intruders": "benchmarks/check_sfm_intruders.py",
     "sfm-dense": "benchmarks/check_sfm_dense.py",
+    "sfm-pycolmap16": "benchmarks/check_sfm_pycolmap16.py",
     "pair-pose": "benchmarks/check_pair_pose.py",
     "reconstruct-real": "benchmarks/bench_reconstruct_real.py",
     "reconstruct-fisheye": "benchmarks/bench_reconstruct_fisheye.py",

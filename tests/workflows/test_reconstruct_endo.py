@@ -60,6 +60,24 @@ def test_endoscopy_options_reconstruct_the_real_frames(
     assert m["options"]["auto_mask"] is True and m["options"]["contrast_threshold"] == 0.01
 
 
+def test_equalize_reaches_the_keypoints(
+    frames: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # CLAHE before SIFT: more points than test_endoscopy_options_reconstruct_the_real_frames'
+    # run without it (benchmarks/results/sfm-pycolmap16-2026-12-01a.md on the whole clip)
+    counts = {}
+    for eq in ([], ["--equalize"]):
+        out = tmp_path / f"out{len(eq)}"
+        args = ["reconstruct", str(frames), "--camera", str(ENDO / "camera.toml"), "-o", str(out)]
+        endo = ["--auto-mask", "--contrast-threshold", "0.01", *eq]
+        assert main([*args, *endo]) == 0, capsys.readouterr().err
+        m = json.loads((out / "metrics.json").read_text())
+        assert m["registered"] >= 9
+        assert m["options"]["equalize"] is bool(eq)
+        counts[bool(eq)] = m["points"]
+    assert counts[True] > 1.3 * counts[False], counts
+
+
 def test_mask_and_auto_mask_exclude_each_other(
     frames: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -176,6 +176,7 @@ def detect_features(
     mask: ArrayLike | None = None,
     max_size: int | None = 3200,
     contrast_threshold: float = 0.04,
+    equalize: bool = False,
 ) -> Features:
     r"""Detect SIFT keypoints and descriptors (OpenCV's SIFT, the ``reconstruct`` extra).
 
@@ -210,6 +211,17 @@ def detect_features(
         (0, 1). 0.04, OpenCV's default, suits photographs; the smooth, low-contrast tissue of
         an endoscope's frames keeps a few tens of keypoints with it, and 0.01 ten times as
         many (``benchmarks/check_endo_real.py``).
+    equalize : bool
+        Equalize the grey levels before SIFT by contrast-limited adaptive histogram
+        equalization (CLAHE: Zuiderveld 1994, "Contrast limited adaptive histogram
+        equalization", Graphics Gems IV; OpenCV's, 8 x 8 tiles, each tile's histogram
+        clipped at twice its mean count and the excess spread over every level, the
+        mapping interpolated bilinearly between tiles). An endoscope's light falls off
+        from the centre and its tissue is smooth: the dim parts of a frame keep few
+        keypoints at one threshold for the whole frame, and each tile's own contrast
+        stretched gives them as many as the lit parts (the C3VD frames of tests/data/endo:
+        266 -> 970 keypoints, median, at contrast 0.01). False: the grey levels as they
+        are.
 
     Returns
     -------
@@ -245,6 +257,8 @@ def detect_features(
         if m is not None:
             m = cv2.resize(m, (ws, hs), interpolation=cv2.INTER_NEAREST)
         sx, sy = w / ws, h / hs
+    if equalize:
+        a = cv2.createCLAHE(clipLimit=2.0, tileGridSize=(8, 8)).apply(a)
     # the doubled first octave must map pixel x to 2x: OpenCV's default resize maps it to
     # 2x + 1/2 and every keypoint lands a quarter pixel off, down and right
     sift = cv2.SIFT_create(nfeatures=n, contrastThreshold=ct, enable_precise_upscale=True)
@@ -1356,6 +1370,7 @@ def reconstruct_sequence(
     contrast_threshold: float = 0.04,
     refine_focal: bool = False,
     refine_distortion: bool = False,
+    equalize: bool = False,
 ) -> Reconstruction:
     r"""Reconstruct the cameras and a sparse point cloud from an ordered image sequence.
 
@@ -1431,6 +1446,12 @@ def reconstruct_sequence(
         lens parameter (Torr 1998; Torr & Zisserman 2000); a note says what was tried,
         the two costs and what was chosen. ``distortion`` given as ``KannalaBrandt`` with
         k1 alone: that lens's term is the one refined.
+    equalize : bool
+        Each frame's grey levels equalized by CLAHE before SIFT (:func:`detect_features`):
+        for an endoscope, whose light falls off from the centre: more points on the C3VD
+        clip, but no model on a 192 x 192 colonoscope clip and a focal length run off
+        without a camera (``benchmarks/results/sfm-pycolmap16-2026-12-01a.md``): with a
+        camera given, checked against a run without it.
 
     Returns
     -------
@@ -1456,6 +1477,7 @@ def reconstruct_sequence(
         "rng": rng,
         "masks": masks,
         "contrast_threshold": contrast_threshold,
+        "equalize": bool(equalize),
         "refine_focal": bool(refine_focal),
         "refine_distortion": bool(refine_distortion),
         # refused before the keypoints: a lens it cannot refine
@@ -1912,6 +1934,7 @@ def _reconstruct(
     masks: ArrayLike | Sequence[ArrayLike | None] | None,
     contrast_threshold: float,
     cache: dict[str, Any],
+    equalize: bool = False,
     starts: frozenset[int] | None,
     refine_focal: bool = False,
     refine_distortion: bool = False,
@@ -1949,7 +1972,9 @@ def _reconstruct(
         per_frame = [one] * n
     if "feats" not in cache:
         cache["feats"] = [
-            detect_features(im, max_features=max_features, mask=m, contrast_threshold=ct)
+            detect_features(
+                im, max_features=max_features, mask=m, contrast_threshold=ct, equalize=equalize
+            )
             for im, m in zip(images, per_frame, strict=True)
         ]
     feats = cache["feats"]
