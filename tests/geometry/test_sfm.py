@@ -284,6 +284,10 @@ def test_bad_sequences() -> None:
         reconstruct_sequence([np.zeros((20, 20, 3), np.uint8), np.zeros((20, 30, 3), np.uint8)], K)
     with pytest.raises(InvalidInputError, match="no texture"):
         reconstruct_sequence([np.full((60, 80, 3), 90, np.uint8)] * 3, K)
+    frames = [np.zeros((20, 20, 3), np.uint8)] * 2
+    for flag in ("equalize", "refine_focal", "refine_distortion"):
+        with pytest.raises(InvalidInputError, match=flag):
+            reconstruct_sequence(frames, K, **{flag: "no"})
 
 
 @pytest.mark.slow
@@ -437,6 +441,8 @@ def test_large_image_features_are_found_reduced_and_mapped_back() -> None:
     assert detect_features(big[:200, :200], max_size=None).xy.shape[1] == 2
     with pytest.raises(InvalidInputError, match="max_size"):
         detect_features(big, max_size=10)
+    with pytest.raises(InvalidInputError, match="equalize"):
+        detect_features(big, equalize="no")
 
 
 def test_keypoints_are_where_the_blobs_are() -> None:

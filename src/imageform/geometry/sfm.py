@@ -81,7 +81,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imageform._typing import ArrayLike
-from imageform._validate import as_int, as_real, as_real_array, describe
+from imageform._validate import as_bool, as_int, as_real, as_real_array, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 if TYPE_CHECKING:
@@ -236,6 +236,7 @@ def detect_features(
     n = as_int(max_features, "max_features", minimum=8, maximum=1_000_000)
     cap = None if max_size is None else as_int(max_size, "max_size", minimum=64)
     ct = as_real(contrast_threshold, "contrast_threshold", positive=True, maximum=1.0)
+    equalize = as_bool(equalize, "equalize")
     a = np.asarray(image)
     dtype = a.dtype
     if dtype.kind in "uif" and a.ndim == 3 and a.shape[-1] in (3, 4):
@@ -1468,6 +1469,8 @@ def reconstruct_sequence(
         No pair of frames with enough matches and parallax to start from, or none whose
         pose triangulates 30 points (five pairs tried).
     """
+    refine_focal = as_bool(refine_focal, "refine_focal")
+    refine_distortion = as_bool(refine_distortion, "refine_distortion")
     cache: dict[str, Any] = {}
     kw: dict[str, Any] = {
         "window": window,
@@ -1477,9 +1480,9 @@ def reconstruct_sequence(
         "rng": rng,
         "masks": masks,
         "contrast_threshold": contrast_threshold,
-        "equalize": bool(equalize),
-        "refine_focal": bool(refine_focal),
-        "refine_distortion": bool(refine_distortion),
+        "equalize": as_bool(equalize, "equalize"),
+        "refine_focal": refine_focal,
+        "refine_distortion": refine_distortion,
         # refused before the keypoints: a lens it cannot refine
         "radial_given": _radial_start(distortion) if refine_distortion else None,
         "cache": cache,
