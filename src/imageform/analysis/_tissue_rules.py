@@ -46,6 +46,17 @@ _GREY_OD = 0.3
 _NEAR_LUMA = 2.0
 _NEAR_OD = 0.5
 
+#: Dense blue ink in the dark rule (images that hold eosin): OD_G < _DARK_BLUE_GREEN OD_R
+#: and OD_B < _DARK_BLUE_BLUE OD_R over half a dark stroke's dark flags is blue ink, not a
+#: stroke of hematoxylin. HistoQC's blue ink over the Kather patches, where dark: OD_G/OD_R
+#: median 0.96-1.03, OD_B/OD_R 0.40-0.41 (check_stain_artefacts.py's tune half of the ink);
+#: Ruifrok & Johnston's hematoxylin 1.08 and 0.44; the dark pixels of the H&E tuning tiles
+#: OD_G/OD_R median 1.15-2.95 (one tile 0.82: 9 pixels, no stroke; measured outside the
+#: scripts). IHC's hematoxylin (no eosin) is bluer: not looked for there.
+#: stain-fold-2026-12-01d.md.
+_DARK_BLUE_GREEN = 1.05
+_DARK_BLUE_BLUE = 0.55
+
 #: Default luma of the dark rule (HistoQC: 0.15; 0.1 drops 1-3.5 % of dense nuclei).
 _DARK_LUMA = 0.08
 
@@ -70,7 +81,8 @@ _DARK_LUMA = 0.08
 #: its tissue) and missed two thumbnails' folds (laurapurcaro-bit/FolDet: 0 and 27 %
 #: removed); it also dropped fragments of dense blue ink over dense tissue, which are
 #: dark strokes of hematoxylin's colour too (benchmarks/check_stain_artefacts.py: blue ink
-#: over the Kather patches). Without eosin (IHC: DAB reads as both stains) no fold is
+#: over the Kather patches): those whose dark flags are half of blue ink's colour are ink
+#: (_DARK_BLUE_GREEN, _DARK_BLUE_BLUE). Without eosin (IHC: DAB reads as both stains) no fold is
 #: looked for. benchmarks/check_stain_fold.py, stain-fold-2026-12-01a.md. A Dask image:
 #: the whole image's medians and percentile (_FOLD_DASK_SAMPLE), as in memory.
 _FOLD_H = (0.650, 0.704, 0.286)
@@ -281,7 +293,20 @@ def _flags(rgb: np.ndarray, od: np.ndarray, p: dict[str, Any]) -> dict[str, np.n
     # each channel contiguous once (the rules below read them many times)
     r, g, b = (np.ascontiguousarray(od[..., i]) for i in range(3))
     shape = rgb.shape[:-1]
-    keys = ("pen", "green", "deep", "dark", "near", "grey", "inky", "he", "weak", "glass", "fold")
+    keys = (
+        "pen",
+        "green",
+        "deep",
+        "dark",
+        "near",
+        "grey",
+        "inky",
+        "blue",
+        "he",
+        "weak",
+        "glass",
+        "fold",
+    )
     out = {k: np.zeros(shape, dtype=bool) for k in keys}
     if p["pen"]:
         strong = r >= p["pen_min_od"]
@@ -314,6 +339,8 @@ def _flags(rgb: np.ndarray, od: np.ndarray, p: dict[str, Any]) -> dict[str, np.n
         out["near"] = (luma < _NEAR_LUMA * p["dark_luminance"]) | (neutral & (mean >= _NEAR_OD))
         # black ink: dense and neutral (its region's median below, :func:`_kept`)
         out["inky"] = neutral & (mean >= _INK_OD)
+        # dense blue ink: red absorbed as much as green, little blue (:func:`_kept`)
+        out["blue"] = (g < _DARK_BLUE_GREEN * r) & (b < _DARK_BLUE_BLUE * r)
         out["od"] = od
         out["luma"] = luma
         out["dense"] = np.zeros(shape[:-2] if len(shape) > 2 else (), dtype=np.float64)
@@ -729,7 +756,10 @@ def _kept(
         shaped |= (flagged >= max(_LARGE * s2, _LARGE_SHARE * n_image)) | (flagged >= n_image / 2)
         # black ink is neutral: half the region's dark flags by the neutral rule
         grey = 2 * np.bincount(labels[dark & flags["grey"]], minlength=count + 1) >= size
-        ok = shaped & grey & (size > 0)
+        # ... or blue ink: half of them of dense blue ink's colour (hematoxylin's are greener)
+        blue = 2 * np.bincount(labels[dark & flags["blue"]], minlength=count + 1) >= size
+        blue &= np.isfinite(float(flags["dense"]))  # an image that holds eosin
+        ok = shaped & (grey | blue) & (size > 0)
         # a fold: both stains doubled over half its flags, a stroke, large or dense
         n_fold = np.bincount(labels[fold], minlength=count + 1)
         norm = np.sqrt((flags["od"][fold] ** 2).sum(axis=-1))

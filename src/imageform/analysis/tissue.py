@@ -55,7 +55,9 @@ TISSUE_MASK_RULES: MappingProxyType[str, str] = MappingProxyType(
         "least twice the median of the absorbing pixels; a region where half the flags are "
         "so is a fold when dark (the mean luma of those < 3 dark_luminance) and a stroke, "
         "large or dense (their mean ||OD|| >= twice the absorbing pixels' 90th percentile). "
-        "A dark stroke of one stain (dense nuclei, collagen) is tissue. Lengths and areas "
+        "A dark stroke of one stain (dense nuclei, collagen) is tissue, unless half its dark "
+        "flags absorb red as much as green (OD_G < 1.05 OD_R, OD_B < 0.55 OD_R): blue ink. "
+        "Lengths and areas "
         "scale with pixel_size_um (0.5 um per pixel: as given), a stroke's length with the "
         "image's shorter side under 512 pixels",
         "he": "H&E slides only (he=True; DAB is brown and hematoxylin + DAB grey): yellow, "
@@ -153,7 +155,9 @@ def tissue_mask(
       :math:`\lVert OD\rVert` at least twice the 90th percentile of the absorbing
       pixels': a fold on a slide thumbnail is a blob). A dark stroke of one stain - a
       chain of dense nuclei, a band of dense collagen - is tissue (the stroke test alone
-      took it for a fold: 12 % of a fresh tile's tissue). On an image without eosin
+      took it for a fold: 12 % of a fresh tile's tissue), unless half its dark pixels have
+      :math:`OD_G < 1.05\,OD_R` and :math:`OD_B < 0.55\,OD_R`: dense blue ink over
+      tissue (hematoxylin absorbs green more: 1.08 by Ruifrok's vector). On an image without eosin
       (IHC, where DAB reads as both stains) folds are not looked for; a pale fold (two
       layers of pale tissue) is not found either: the same stains, denser, do not turn
       the stain vectors.
