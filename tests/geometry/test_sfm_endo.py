@@ -91,9 +91,10 @@ def test_half_the_contrast_threshold_keeps_pycolmaps_keypoint_count() -> None:
 
 
 def test_equalized_frames_find_keypoints_in_the_dim_parts() -> None:
-    # CLAHE before SIFT (equalize=True): the committed frames 266 -> 970 keypoints (median)
-    # at contrast 0.01, the share beyond 120 px of the principal point (the dim outer tissue)
-    # 66 -> 73 %; benchmarks/results/sfm-pycolmap16-2026-12-01a.md on the whole clip
+    # CLAHE before SIFT (equalize=True): the committed frames 266 -> 936 keypoints (median,
+    # 970 with 8 x 8 tiles) at contrast 0.01, the share beyond 120 px of the principal point
+    # (the dim outer tissue) 66 -> 73 %; benchmarks/results/sfm-pycolmap16-2026-12-01d.md on
+    # the whole clip
     from imageform.io import read_camera
 
     cam = read_camera(ENDO / "camera.toml").camera
@@ -114,6 +115,19 @@ def test_equalized_frames_find_keypoints_in_the_dim_parts() -> None:
     assert mask[xy[:, 1], xy[:, 0]].all()
 
 
+def test_equalize_sizes_its_tiles_in_pixels() -> None:
+    # CLAHE's tiles are about 64 px whatever the frame's size: 3 x 3 on a 192 px frame (the
+    # colonoscope clip colon-a), 7 x 7 on C3VD's 445 x 448 (8 x 8 of a 192 px frame are
+    # 24 px: colon-a made no model with them; sfm-pycolmap16-2026-12-01d.md)
+    grey = cv2.cvtColor(_frames()[0], cv2.COLOR_RGB2GRAY)
+    for size, tiles in (((445, 448), (7, 7)), ((192, 192), (3, 3)), ((40, 300), (1, 5))):
+        g = cv2.resize(grey, size, interpolation=cv2.INTER_AREA)
+        f = detect_features(g, contrast_threshold=0.01, equalize=True)
+        e = cv2.createCLAHE(clipLimit=2.0, tileGridSize=tiles).apply(g)
+        ref = detect_features(e, contrast_threshold=0.01)
+        np.testing.assert_array_equal(f.xy, ref.xy)
+
+
 def test_equalized_reconstruction_registers_the_frames_with_more_points() -> None:
     from imageform.io import read_camera
 
@@ -124,7 +138,7 @@ def test_equalized_reconstruction_registers_the_frames_with_more_points() -> Non
     plain = reconstruct_sequence(frames, cam.K, cam.distortion, **kw)
     eq = reconstruct_sequence(frames, cam.K, cam.distortion, equalize=True, **kw)
     assert eq.registered.all(), eq.notes
-    assert len(eq.points) > 1.3 * len(plain.points)  # 149 -> 245 measured
+    assert len(eq.points) > 1.3 * len(plain.points)  # 149 -> 225 measured (245 with 8 x 8 tiles)
     assert np.nanmax(eq.rms_px) < 1.5
     # no false registration (tens of degrees off): each step against OpenCV's two-view
     # estimate on the plain keypoints, as above; measured 2.68 degrees at most (frames 3-4;

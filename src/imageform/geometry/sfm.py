@@ -214,13 +214,19 @@ def detect_features(
     equalize : bool
         Equalize the grey levels before SIFT by contrast-limited adaptive histogram
         equalization (CLAHE: Zuiderveld 1994, "Contrast limited adaptive histogram
-        equalization", Graphics Gems IV; OpenCV's, 8 x 8 tiles, each tile's histogram
-        clipped at twice its mean count and the excess spread over every level, the
-        mapping interpolated bilinearly between tiles). An endoscope's light falls off
+        equalization", Graphics Gems IV; OpenCV's, tiles of about 64 px: ``round(W / 64)``
+        x ``round(H / 64)`` of them, at least one, OpenCV's 8 x 8 on a 512 px image; each
+        tile's histogram clipped at twice its mean count and the excess spread over every
+        level, the mapping interpolated bilinearly between tiles). The tiles are sized in
+        pixels, not as a fraction of the frame: 8 x 8 tiles of a 192 px frame are 24 px,
+        and a grey mapping that changes every 24 px, fixed to the image while the tissue
+        moves under it, is at the scale of SIFT's own blobs and descriptors (such a
+        colonoscope clip made no model with them; it does with 64 px tiles,
+        ``benchmarks/results/sfm-pycolmap16-2026-12-01d.md``). An endoscope's light falls off
         from the centre and its tissue is smooth: the dim parts of a frame keep few
         keypoints at one threshold for the whole frame, and each tile's own contrast
         stretched gives them as many as the lit parts (the C3VD frames of tests/data/endo:
-        266 -> 970 keypoints, median, at contrast 0.01). False: the grey levels as they
+        266 -> 936 keypoints, median, at contrast 0.01). False: the grey levels as they
         are.
 
     Returns
@@ -259,7 +265,11 @@ def detect_features(
             m = cv2.resize(m, (ws, hs), interpolation=cv2.INTER_NEAREST)
         sx, sy = w / ws, h / hs
     if equalize:
-        a = cv2.createCLAHE(clipLimit=2.0, tileGridSize=(8, 8)).apply(a)
+        # tiles of about 64 px whatever the frame's size (OpenCV's 8 x 8 grid on a 512 px
+        # image): 8 x 8 tiles of a 192 px frame are 24 px, and a grey mapping that changes
+        # every 24 px, fixed to the image while the tissue moves, is at SIFT's own scale
+        tiles = (max(1, round(a.shape[1] / 64)), max(1, round(a.shape[0] / 64)))
+        a = cv2.createCLAHE(clipLimit=2.0, tileGridSize=tiles).apply(a)
     # the doubled first octave must map pixel x to 2x: OpenCV's default resize maps it to
     # 2x + 1/2 and every keypoint lands a quarter pixel off, down and right
     sift = cv2.SIFT_create(nfeatures=n, contrastThreshold=ct, enable_precise_upscale=True)
@@ -1450,9 +1460,10 @@ def reconstruct_sequence(
     equalize : bool
         Each frame's grey levels equalized by CLAHE before SIFT (:func:`detect_features`):
         for an endoscope, whose light falls off from the centre: more points on the C3VD
-        clip, but no model on a 192 x 192 colonoscope clip and a focal length run off
-        without a camera (``benchmarks/results/sfm-pycolmap16-2026-12-01a.md``): with a
-        camera given, checked against a run without it.
+        clip and the colonoscope clips (``benchmarks/results/sfm-pycolmap16-2026-12-01d.md``),
+        but poses that move against a run without it (no truth says which is nearer) and,
+        without a camera, a focal length the frames do not fix: with a camera given,
+        checked against a run without it.
 
     Returns
     -------

@@ -144,7 +144,7 @@ class ReconstructOptions(Options):
     )
     equalize: bool = option(
         False,
-        help="Equalize each frame's grey levels by CLAHE (8 x 8 tiles) before SIFT: an "
+        help="Equalize each frame's grey levels by CLAHE (tiles of about 64 px) before SIFT: an "
         "endoscope's dim parts, far from its light, then keep as many keypoints as the lit "
         "ones (more points; check it against a run without it, with --camera).",
     )
