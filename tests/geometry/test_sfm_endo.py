@@ -70,8 +70,11 @@ def test_frames_with_short_tracks_are_registered_by_their_points() -> None:
         theirs = _opencv_rotation(frames[i], frames[j], mask, cam)
         # the rotations are small (0.3 to 3.5 degrees a step) and a two-view estimate of
         # one scatters by up to 2.3 degrees here (against pycolmap's whole clip): a false
-        # registration would be tens of degrees off
-        assert _angle_deg(ours @ theirs.T) < 2.5, (i, j, _angle_deg(ours), _angle_deg(theirs))
+        # registration would be tens of degrees off. Frames 3-4 differ by 2.58 degrees
+        # (ours 1.27 a step, OpenCV's two-view 3.48; the same on a8a403dc, where this slow
+        # test was failing unnoticed at a 2.5 bound): 5 degrees tells scatter from a false
+        # registration, which is what this test is for
+        assert _angle_deg(ours @ theirs.T) < 5.0, (i, j, _angle_deg(ours), _angle_deg(theirs))
 
 
 def test_half_the_contrast_threshold_keeps_pycolmaps_keypoint_count() -> None:
