@@ -237,6 +237,27 @@ def test_open_lazy_reads_a_pyramid_level(tmp_path: Path) -> None:
         open_lazy(flat, level=1)
 
 
+def test_two_levels_or_block_sizes_of_one_file_share_no_blocks(tmp_path: Path) -> None:
+    """Two levels of one pyramid in one graph, or one strip TIFF at two block sizes, each keep
+    their own blocks: dask's keys name the level and the block size (level 1 once took level
+    0's blocks where both were decoded tile by tile into smaller blocks)."""
+    from imageform.batch.chunked import open_lazy
+
+    src = tmp_path / "slide.svs"
+    img = _svs(src)
+    a0, a1 = open_lazy(src, TILE // 2), open_lazy(src, TILE // 2, level=1)
+    assert a0.name != a1.name
+    both = (a0[: a1.shape[0], : a1.shape[1]].astype(np.int16) - a1).compute()
+    np.testing.assert_array_equal(both, img[:96, :128].astype(np.int16) - _half(img))
+    flat = tmp_path / "flat.tif"
+    tifffile.imwrite(flat, _image(32, 32))  # uncompressed strips
+    b8, b16 = open_lazy(flat, 8), open_lazy(flat, 16)
+    assert b8.name != b16.name
+    np.testing.assert_array_equal(
+        (b8 + b16.rechunk(8)).compute(), 2 * _image(32, 32).astype(np.uint16) % 256
+    )
+
+
 def _damaged_jpeg_svs(path: Path) -> None:
     """An .svs whose first JPEG tile has a bogus marker length (OpenSlide's unreadable.svs)."""
     img = _image(128, 128)

@@ -255,16 +255,7 @@ def _tiff_lazy(
                 p, int(page.dataoffsets[0]), tuple(page.shape), page.dtype, tf.byteorder
             )
     if strips:
-        if len(src.shape) != 3 or src.shape[-1] != 3:
-            raise InvalidInputError(f"{p}: expected an RGB image (H, W, 3), got {src.shape}")
-        st = p.stat()
-        return da.from_array(
-            src,
-            chunks=(chunk, chunk, 3),
-            name=f"imageform-strips-{p}-{st.st_size}-{st.st_mtime_ns}",
-            asarray=False,
-            fancy=False,
-        )
+        return _rgb_blocks(da, src, p, chunk, "strips", 0, wrap=False)
     import weakref
 
     store = tifffile.imread(p, aszarr=True)
@@ -432,18 +423,7 @@ def _dicom_lazy(p: Path, chunk: int, da: Any, level: int) -> Any:
             f"level {level}"
         )
     src = levels[level][0]
-    z = dicom.SlideLevel(src)
-    if z.ndim != 3 or z.shape[-1] != 3:
-        raise InvalidInputError(f"{p}: expected an RGB image (H, W, 3), got shape {z.shape}")
-    st = src.stat()
-    wrapped: Any = _DecodedOnce(z, chunk, src) if max(z.chunks[:2]) > chunk else _Guarded(z, src)
-    return da.from_array(
-        wrapped,
-        chunks=(chunk, chunk, 3),
-        name=f"imageform-dicom-{src}-{st.st_size}-{st.st_mtime_ns}-{chunk}",
-        asarray=False,
-        fancy=False,
-    )
+    return _rgb_blocks(da, dicom.SlideLevel(src), src, chunk, "dicom", 0, shown=p)
 
 
 def _dicom_meta(p: Path) -> _TiffMeta:
@@ -525,22 +505,42 @@ def _open_lazy(path: str | Path, chunk: int, opened: list[Any] | None, level: in
         )
     if isinstance(z, zarr.Group):  # a pyramid: level 0 is the full resolution
         z = z[keys[level]]
-    if z.ndim != 3 or z.shape[-1] != 3:
-        raise InvalidInputError(f"{p}: expected an RGB image (H, W, 3), got shape {z.shape}")
-    if z.chunks[0] > chunk or z.chunks[1] > chunk:  # tiles or strips larger than a block
-        st = p.stat()
-        return da.from_array(
-            _DecodedOnce(z, chunk, p),
-            chunks=(chunk, chunk, z.shape[-1]),
-            name=f"imageform-decoded-once-{p}-{st.st_size}-{st.st_mtime_ns}-{chunk}",
-            asarray=False,
-            fancy=False,
+    return _rgb_blocks(da, z, p, chunk, "tiles", level)
+
+
+def _rgb_blocks(
+    da: Any,
+    src: Any,
+    p: Path,
+    chunk: int,
+    kind: str,
+    level: int,
+    *,
+    wrap: bool = True,
+    shown: Path | None = None,
+) -> Any:
+    """Return ``src`` (an RGB array-like of the file ``p``) as a dask array of ``chunk`` blocks.
+
+    ``wrap``: ``src`` has ``chunks`` (tiles or strips, zarr's or a DICOM level's): wrapped in
+    :class:`_DecodedOnce` when a stored chunk is larger than a block (each decoded once for
+    the blocks it covers), else in :class:`_Guarded` (a damaged chunk is one error naming the
+    file). The graph's name holds the file's path, size, time, the level and the block size,
+    so two levels or two block sizes of one file never share keys. ``shown``: the path errors
+    name (the file the user gave; a DICOM level may be another file of its series).
+    """
+    if len(src.shape) != 3 or src.shape[-1] != 3:
+        raise InvalidInputError(
+            f"{shown or p}: expected an RGB image (H, W, 3), got shape {tuple(src.shape)}"
         )
+    if wrap:
+        big = max(src.chunks[:2]) > chunk
+        src = _DecodedOnce(src, chunk, p) if big else _Guarded(src, p)
+        kind += "-decoded-once" if big else ""
     st = p.stat()
     return da.from_array(
-        _Guarded(z, p),
-        chunks=(chunk, chunk, z.shape[-1]),
-        name=f"imageform-tiles-{p}-{st.st_size}-{st.st_mtime_ns}-{level}-{chunk}",
+        src,
+        chunks=(chunk, chunk, 3),
+        name=f"imageform-{kind}-{p}-{st.st_size}-{st.st_mtime_ns}-{level}-{chunk}",
         asarray=False,
         fancy=False,
     )
