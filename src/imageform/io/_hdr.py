@@ -105,115 +105,83 @@ def _truncated(path: Path, row: int, rows: int) -> UnreadableFileError:
     return UnreadableFileError(path, f"the file is truncated (scanline {row} of {rows})")
 
 
-def _scanlines(data: bytes, offset: int, length: int, count: int, path: Path) -> np.ndarray:
-    """Decode ``count`` scanlines of ``length`` RGBE pixels as uint8 ``(count, length, 4)``."""
-    out = np.empty((count, length, 4), np.uint8)
+def _scanlines(
+    data: bytes, offset: int, length: int, count: int, path: Path, out: np.ndarray | None
+) -> None:
+    """Walk ``count`` scanlines of ``length`` RGBE pixels; decode them into ``out`` if given.
+
+    ``out``: uint8 ``(count, length, 4)``, or None to step over the scanlines only (what
+    :func:`check_size` can afford): a new-style run-length scanline a run at a time, a flat
+    one as ``length`` pixels at once (a pixel at a time only where it holds Radiance's old
+    runs). A corrupt run or a file that ends early is one line naming the scanline.
+    """
     pos, size = offset, len(data)
+    buf = np.frombuffer(data, np.uint8)
     for row in range(count):
         head = data[pos : pos + 4]
         if len(head) < 4:
             raise _truncated(path, row, count)
-        new_rle = 8 <= length <= 0x7FFF and head[0] == 2 and head[1] == 2 and not head[2] & 0x80
-        if new_rle:
+        if 8 <= length <= 0x7FFF and head[0] == 2 and head[1] == 2 and not head[2] & 0x80:
             if (head[2] << 8) | head[3] != length:
                 raise UnreadableFileError(
                     path, f"corrupt scanline {row}: its length is not the image's width"
                 )
             pos += 4
-            line = out[row]
             for c in range(4):
                 x = 0
                 while x < length:
                     if pos >= size:
                         raise _truncated(path, row, count)
                     n = data[pos]
-                    pos += 1
-                    if n > 128:
-                        n -= 128
-                        if x + n > length:
-                            raise UnreadableFileError(path, f"corrupt run in scanline {row}")
-                        if pos >= size:
-                            raise _truncated(path, row, count)
-                        line[x : x + n, c] = data[pos]
-                        pos += 1
-                    else:
-                        if n == 0 or x + n > length:
-                            raise UnreadableFileError(path, f"corrupt run in scanline {row}")
-                        if pos + n > size:
-                            raise _truncated(path, row, count)
-                        line[x : x + n, c] = np.frombuffer(data, np.uint8, n, pos)
-                        pos += n
+                    run = n > 128
+                    n = n - 128 if run else n
+                    if n == 0 or x + n > length:
+                        raise UnreadableFileError(path, f"corrupt run in scanline {row}")
+                    if pos + 1 + (1 if run else n) > size:
+                        raise _truncated(path, row, count)
+                    if out is not None:
+                        out[row, x : x + n, c] = buf[pos + 1] if run else buf[pos + 1 : pos + 1 + n]
+                    pos += 2 if run else 1 + n
                     x += n
             continue
-        # flat pixels, with Radiance's old runs (1, 1, 1, n: repeat the pixel before)
-        x, shift, line = 0, 0, out[row]
-        while x < length:
-            px = data[pos : pos + 4]
-            if len(px) < 4:
-                raise _truncated(path, row, count)
-            pos += 4
-            if px[0] == 1 and px[1] == 1 and px[2] == 1:
-                n = px[3] << shift
-                if x == 0 or x + n > length:
-                    raise UnreadableFileError(path, f"corrupt run in scanline {row}")
-                line[x : x + n] = line[x - 1]
-                x += n
-                shift += 8
-            else:
-                line[x] = np.frombuffer(px, np.uint8)
-                x += 1
-                shift = 0
-    return out
-
-
-def check_size(head: Header, data: bytes, path: Path) -> None:
-    """Refuse, in one line, a file whose scanlines end before the image does.
-
-    The scanlines are stepped over, not decoded (what :func:`image_info` can afford): a
-    new-style run-length scanline a run at a time, a flat one as ``length`` pixels at once
-    (a pixel at a time only where it holds Radiance's old runs). A header alone, or a file
-    cut in its last scanline, says which scanline it ends in, as :func:`read` does.
-    """
-    o1 = head.axes[0]
-    count, length = (head.height, head.width) if o1[1:] == b"Y" else (head.width, head.height)
-    pos, size = head.offset, len(data)
-    buf = np.frombuffer(data, np.uint8)
-    for row in range(count):
-        h = data[pos : pos + 4]
-        if len(h) < 4:
-            raise _truncated(path, row, count)
-        if 8 <= length <= 0x7FFF and h[0] == 2 and h[1] == 2 and not h[2] & 0x80:
-            pos += 4
-            for _ in range(4):
-                x = 0
-                while x < length:
-                    if pos >= size:
-                        raise _truncated(path, row, count)
-                    n = data[pos]
-                    if n > 128:
-                        x, pos = x + n - 128, pos + 2
-                    else:
-                        x, pos = x + max(n, 1), pos + 1 + n
-            if pos > size:
-                raise _truncated(path, row, count)
-            continue
         px = buf[pos : pos + 4 * min(length, max(size - pos, 0) // 4)].reshape(-1, 4)
-        runs = (px[:, 0] == 1) & (px[:, 1] == 1) & (px[:, 2] == 1)
-        if not runs.any():
+        if not ((px[:, 0] == 1) & (px[:, 1] == 1) & (px[:, 2] == 1)).any():
             if len(px) < length:
                 raise _truncated(path, row, count)
+            if out is not None:
+                out[row] = px
             pos += 4 * length
             continue
         x, shift = 0, 0
-        while x < length:  # Radiance's old runs: a pixel at a time
+        while x < length:  # Radiance's old runs (1, 1, 1, n: repeat the pixel before)
             p4 = data[pos : pos + 4]
             if len(p4) < 4:
                 raise _truncated(path, row, count)
             pos += 4
             if p4[0] == 1 and p4[1] == 1 and p4[2] == 1:
-                x, shift = x + max(p4[3] << shift, 1), shift + 8
+                n = p4[3] << shift
+                if x == 0 or x + n > length:
+                    raise UnreadableFileError(path, f"corrupt run in scanline {row}")
+                if out is not None:
+                    out[row, x : x + n] = out[row, x - 1]
+                x, shift = x + n, shift + 8
             else:
+                if out is not None:
+                    out[row, x] = buf[pos - 4 : pos]
                 x, shift = x + 1, 0
+
+
+def check_size(head: Header, data: bytes, path: Path) -> None:
+    """Refuse, in one line, a file whose scanlines end before the image does (or are corrupt).
+
+    The scanlines are stepped over, not decoded (:func:`_scanlines` without ``out``). A header
+    alone, or a file cut in its last scanline, says which scanline it ends in, as
+    :func:`read` does.
+    """
+    count, length = (
+        (head.height, head.width) if head.axes[0][1:] == b"Y" else (head.width, head.height)
+    )
+    _scanlines(data, head.offset, length, count, path, None)
 
 
 def read(path: Path, data: bytes) -> np.ndarray:
@@ -221,7 +189,8 @@ def read(path: Path, data: bytes) -> np.ndarray:
     head = header(data, path)
     (o1, o2) = head.axes
     count, length = (head.height, head.width) if o1[1:] == b"Y" else (head.width, head.height)
-    rgbe = _scanlines(data, head.offset, length, count, path)
+    rgbe = np.empty((count, length, 4), np.uint8)
+    _scanlines(data, head.offset, length, count, path, rgbe)
     e = rgbe[..., 3].astype(np.int32)
     scale = np.where(e > 0, np.ldexp(np.float32(1.0), e - 136), 0).astype(np.float32)
     rgb = (rgbe[..., :3].astype(np.float32) + np.float32(0.5)) * scale[..., None]
