@@ -281,3 +281,21 @@ def test_info_of_a_truncated_hdr_says_where_its_scanlines_end_as_read_does(
     assert main(["info", str(cut)]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "truncated (scanline 0 of 9)" in err
+
+
+def test_info_and_read_refuse_a_corrupt_run_alike(tmp_path: Path) -> None:
+    """One scanline walker serves ``read_image`` and ``image_info``: a run past the line's end
+    or a zero-length run is the same one line from both (``info`` once stepped over them)."""
+    good = tmp_path / "good.hdr"
+    cv2.imwrite(str(good), np.tile(HDR_RGB, (1, 4, 1))[..., ::-1].copy())
+    data = good.read_bytes()
+    first = data.index(b"\n", data.index(b"\n\n") + 2) + 1 + 4  # the first run of scanline 0
+    for count in (0, 255):  # a zero-length run; a repeat of 127, past the 52-pixel line
+        bad = tmp_path / f"bad{count}.hdr"
+        bad.write_bytes(data[:first] + bytes([count]) + data[first + 1 :])
+        with pytest.raises(InvalidInputError) as said:
+            image_info(bad)
+        with pytest.raises(InvalidInputError) as read:
+            read_image(bad)
+        assert "corrupt run in scanline 0" in str(said.value)
+        assert str(said.value) == str(read.value)
