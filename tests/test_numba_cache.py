@@ -312,6 +312,15 @@ def test_warm_inputs_hold_every_jobs_input(tmp_path: Path) -> None:
     if importlib.util.find_spec("cv2") is not None:
         want.add("reconstruct")
     assert {j[0] for j in jobs} >= want
+    # a GoPro GPR: the VC-5 decoder's kernels (about 15 s at its first decode otherwise)
+    gpr = [j for j in jobs if j[0] == "develop" and j[1].endswith(".gpr")]
+    assert len(gpr) == 1
+    data = Path(__file__).resolve().parent / "data" / "vc5" / "synthetic.gpr"
+    assert Path(gpr[0][1]).read_bytes() == data.read_bytes()
+    # the DNG carries a GainMap (OpcodeList2), whose kernel phones' DNGs and GPRs need
+    from imageform.io import read_raw
+
+    assert read_raw(tmp_path / "raw.dng").metadata["opcodes_applied"] == 1
     for job in jobs:
         outs = {job[i + 1] for i, a in enumerate(job) if a == "-o"}
         for arg in job:

@@ -109,7 +109,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "psf": "benchmarks/bench_psf.py",
     "phone-dng": "benchmarks/check_phone_dng.py",
     "raw": "benchmarks/bench_raw.py",
-    "raw-fresh": "benchmarks/check_raw_fresh.py",
+    "raw-fresh": "benchmarks/check_raw_fresh_e.py",  # before 2026-12-01: check_raw_fresh.py
     "raw-sweep": "benchmarks/check_raw_sweep.py",
     "raw-variants": "benchmarks/check_raw_variants.py",
     "read-threads": "benchmarks/bench_read_threads.py",

@@ -406,3 +406,24 @@ def test_simulated_dng_develops_as_the_simulation(simulated: tuple[Path, object,
     np.testing.assert_allclose(rolled[low], im[low], atol=3e-5)
     assert np.mean(rolled >= 1.0) <= np.mean(im >= 1.0)
     assert np.all(rolled[~low] >= 0.79)
+
+
+def test_nearly_black_frame_is_noted(tmp_path: Path) -> None:
+    """A dark frame (a Pixel 7 DNG of pigallery2's test data: its brightest photosite 0.84 %
+    of the way from black to white) develops black, as LibRaw's does, with a note saying
+    so and how to brighten it; a frame that reaches 2 % has no such note."""
+    rng = np.random.default_rng(3)
+    noise = rng.normal(1024, 8, (32, 48)).clip(973, 1153).astype(np.uint16)
+    noise[7, 9] = 1153  # the Pixel 7 frame's brightest photosite
+    dark = write_dng(tmp_path / "dark.dng", noise, black_level=1024, white_level=16368,
+                     color_matrix=np.eye(3))  # fmt: skip
+    dev = develop(read_raw(dark))
+    assert float(np.median(dev.image)) < 0.01
+    note = [n for n in dev.notes if "nearly black" in n]
+    assert len(note) == 1 and "0.84 %" in note[0] and "--auto-bright" in note[0]
+    assert not [n for n in develop(read_raw(dark), auto_bright=True).notes if "nearly" in n]
+    lit = noise.copy()
+    lit[5, 5] = 1024 + 0.021 * (16368 - 1024)
+    ok = write_dng(tmp_path / "lit.dng", lit, black_level=1024, white_level=16368,
+                   color_matrix=np.eye(3))  # fmt: skip
+    assert not [n for n in develop(read_raw(ok)).notes if "nearly black" in n]

@@ -118,3 +118,21 @@ def test_cli_info_and_develop_a_gpr(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert main(["develop", src, "-o", str(out)]) == 0
     image = np.asarray(read_image(out), np.float64) / 65535.0  # 16-bit PNG
     assert image.shape == (76, 100, 3) and 0.05 < image.mean() < 0.95
+
+
+def test_unreadable_gpr_refusal_names_our_decoder(tmp_path: Path) -> None:
+    """A GPR whose raw IFD our reader cannot use (no ImageWidth) is refused in one line saying
+    that LibRaw does not decode VC-5 and imageform's own decoder found nothing it reads, not the
+    stale 'neither LibRaw nor tifffile decodes' of before the decoder."""
+    import tifffile
+
+    src = DATA / "synthetic.gpr"
+    with tifffile.TiffFile(src) as tf:
+        entry = tf.pages[0].pages[0].tags[256].offset  # type: ignore[union-attr]
+    data = bytearray(src.read_bytes())
+    data[entry : entry + 2] = (0x7FFF).to_bytes(2, "little")  # ImageWidth: an unknown tag
+    bad = tmp_path / "nowidth.gpr"
+    bad.write_bytes(bytes(data))
+    with pytest.raises(UnreadableFileError, match=r"Compression 9.*imageform's own VC-5") as e:
+        read_raw(bad)
+    assert "\n" not in str(e.value) and "tifffile" not in str(e.value)

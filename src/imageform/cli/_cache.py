@@ -6,11 +6,12 @@ location). ``imageform cache --warm`` pays that once, ahead of time: after insta
 container image, or before a CI test run. It runs the commands people wait on (``simulate`` with its
 built-in scene, ``pose --ransac`` with a Brown-Conrady camera, ``demosaic`` with each method,
 ``convert``, ``calibrate`` on three checkerboard views, ``undistort``, ``depth``,
-``track`` with a ChArUco board and with one ArUco marker, ``vanishing``, ``develop``,
-``characterize`` (board, chart, slanted edge), ``segment``, ``delta-e``, and ``reconstruct`` on five
-frames of a textured room when OpenCV is installed) on small inputs it writes to
-a temporary folder, each in its own process (``--jobs`` at once), so that every kernel they use is
-compiled for the same types and layouts as a real run, and written to the cache.
+``track`` with a ChArUco board and with one ArUco marker, ``vanishing``, ``develop`` (a DNG
+and a GoPro GPR, whose VC-5 decoder alone takes 10-35 s to compile), ``characterize`` (board,
+chart, slanted edge), ``segment``, ``delta-e``, and ``reconstruct`` on five frames of a textured
+room when OpenCV is installed) on small inputs it writes to a temporary folder, each in its own
+process (``--jobs`` at once), so that every kernel they use is compiled for the same types and
+layouts as a real run, and written to the cache.
 """
 
 from __future__ import annotations
@@ -84,10 +85,26 @@ for name, face in (("charuco", chart), ("marker", marker)):
         y, x = 60 + 8 * k, 90 + 12 * k
         frame[y : y + face.shape[0], x : x + face.shape[1]] = face
         write_image(work / name / f"frame{k}.png", np.repeat(frame[..., None], 3, axis=2))
-# develop: a small DNG (the raw pipeline's kernels)
+# develop: a small DNG (the raw pipeline's kernels), written again with a GainMap in its
+# OpcodeList2 (lens shading, as phones' DNGs and GoPro's GPRs carry: its kernel compiles in
+# 10-30 s)
+import struct
+import tifffile
 from imageform.io import write_dng
 raw = (rng.uniform(0.05, 0.8, (64, 96)) * 4095).astype(np.uint16)
 write_dng(work / "raw.dng", raw, white_level=4095, color_matrix=np.eye(3))
+with tifffile.TiffFile(work / "raw.dng") as tf:
+    dng_tags = [(t.code, int(t.dtype), t.count, t.value, True)
+                for t in tf.pages[0].tags if t.code >= 33421]  # the CFA and DNG tags
+params = struct.pack(">8I", 0, 0, 64, 96, 0, 1, 2, 2) + struct.pack(">2I4d", 3, 3, 0.5, 0.5, 0, 0)
+params += struct.pack(">I", 1) + np.full(9, 1.2, ">f4").tobytes()
+ops = struct.pack(">I", 1) + struct.pack(">4I", 9, 0x01030000, 1, len(params)) + params
+tifffile.imwrite(work / "raw.dng", raw, photometric=32803,
+                 extratags=[*dng_tags, (51009, 7, len(ops), ops, True)])
+# develop a GoPro GPR: the VC-5 decoder's kernels (a first decode compiles them for 10-35 s).
+# The package's 10 kB GPR of a synthetic 100 x 76 mosaic is tests/data/vc5/synthetic.gpr
+from importlib.resources import files
+(work / "warm.gpr").write_bytes(files("imageform.cli").joinpath("data", "warm.gpr").read_bytes())
 # characterize: a lab folder of the three board views, a ColorChecker photograph and a
 # slanted edge (a dark square turned 5 degrees, 4 x 4 rays a pixel)
 from imageform.analysis import synthetic_chart_photo
@@ -141,6 +158,8 @@ def _jobs(work: Path) -> list[list[str]]:
     board = ["--camera", f"{w}/cam.toml", "--board"]
     jobs = [
         ["simulate", "-o", f"{w}/sim"],
+        # GoPro's VC-5 decoder (_kernels.vc5, 10-35 s compiled alone): early, one of the longest
+        ["develop", f"{w}/warm.gpr", "-o", f"{w}/gpr.png"],
         ["pose", f"{w}/cam.toml", f"{w}/pairs.csv", "--ransac"],
         ["convert", f"{w}/rgb8.png", "--from", "srgb", "--to", "lab", "-o", f"{w}/lab.tif"],
         ["calibrate", f"{w}/board*.png", "--board", "9x6", "--square", "30mm", "-o", f"{w}/c.toml"],

@@ -18,6 +18,7 @@ DNG written with tifffile, any raw LibRaw reads (through rawpy, the optional
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import math
 import os
@@ -722,11 +723,11 @@ def _read_raw(
         if end > n_bytes:  # cut off in transfer
             raise _truncated(p, end, n_bytes) from None
         if (code := _dng_compression(p)) in _DNG_COMPRESSIONS:  # a DNG: name what stops it
-            kind = _DNG_COMPRESSIONS[code]
+            kind, who = _DNG_COMPRESSIONS[code]
             raise UnreadableFileError(
                 p,
                 f"a DNG whose raw image is compressed with {kind}, Compression {code}, which "
-                f"neither LibRaw as rawpy builds it nor tifffile decodes ({type(exc).__name__})",
+                f"LibRaw as rawpy builds it does not decode ({type(exc).__name__}) {who}",
             ) from None
         raise UnreadableFileError(
             p, _not_raw(p) or f"not a raw file LibRaw can read ({type(exc).__name__})"
@@ -979,9 +980,20 @@ def _dng_raw_page(tf: Any) -> Any:
     return None
 
 
-#: Compressions of DNG raw images that neither LibRaw (as rawpy builds it) nor tifffile may
-#: decode, named in the refusal.
-_DNG_COMPRESSIONS = {9: "GoPro's VC-5 (a GPR file)", 52546: "JPEG XL"}
+#: A frame whose brightest photosite is under this fraction of the way from black to white is
+#: noted as nearly black when developed (a Pixel 7's dark frame: 0.84 %).
+_NEARLY_BLACK = 0.02
+
+#: Compressions of DNG raw images that LibRaw (as rawpy builds it) does not decode: the name
+#: and what else was tried, in the refusal when :func:`_read_dng` could not read the file.
+_DNG_COMPRESSIONS = {
+    9: (
+        "GoPro's VC-5 (a GPR file)",
+        "and imageform's own VC-5 decoder found no raw image it reads in the file (a Bayer "
+        "image of one sample a pixel in a DNG raw IFD)",
+    ),
+    52546: ("JPEG XL", "nor tifffile (with imagecodecs' JPEG XL) decodes"),
+}
 #: Compression of a GoPro GPR's raw image (VC-5, SMPTE ST 2073): :mod:`imageform.io._vc5`.
 _COMPRESSION_VC5 = 9
 
@@ -1532,8 +1544,14 @@ def _transfer_table(transfer: str, gain: float = 1.0) -> np.ndarray:
 
     ``gain`` above 1: the table maps the unbrightened linear value v to the encoding of
     :func:`_highlight_shoulder` (``gain`` v): the brightening and its highlight roll-off in
-    the table (``transfer`` ``"linear"``: no encoding).
+    the table (``transfer`` ``"linear"``: no encoding). A copy of a table computed once per
+    ``(transfer, gain)`` (5 ms each: a third of developing a small DNG).
     """
+    return _transfer_table_cached(transfer, float(gain)).copy()
+
+
+@functools.lru_cache(maxsize=32)
+def _transfer_table_cached(transfer: str, gain: float) -> np.ndarray:
     from imageform._kernels.raw_develop import LUT_SIZE
     from imageform.color import encode
 
@@ -1744,6 +1762,13 @@ def develop(
     if np.any(span <= 0):
         raise InvalidInputError(
             f"{where}: white level {raw.white_level:g} is not above the black level"
+        )
+    top = (float(raw.mosaic.max()) - float(black.min())) / float(np.max(span))
+    if top < _NEARLY_BLACK and not auto_bright and not baseline_exposure:
+        notes.append(
+            f"note: the frame is nearly black: its brightest photosite is {100 * top:.2g} % of "
+            "the way from the black level to white (a dark frame, a lens cap?); "
+            "auto_bright (--auto-bright) brightens it"
         )
     on_gpu = where_to == "cuda" and raw.cfa_pattern is not None and method in _CUDA_METHODS
     if where_to == "cuda" and not on_gpu:
