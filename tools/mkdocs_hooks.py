@@ -161,6 +161,8 @@ BENCH_SCRIPTS: dict[str, str] = {
     "stereo-webcam": "benchmarks/check_stereo_webcam.py",
     "stereo-slant": "benchmarks/check_stereo_slant.py",
     "stereo-recess": "benchmarks/check_stereo_recess.py",
+    "stereo-fill": "benchmarks/bench_stereo_fill.py",
+    "speed-audit": "benchmarks/speed_audit.py",
     "stereo-planes": "benchmarks/check_stereo_planes.py",
     "stereo-sgmp": "benchmarks/check_stereo_sgmp.py",
     "track": "benchmarks/bench_track.py",

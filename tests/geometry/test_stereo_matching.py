@@ -895,3 +895,43 @@ def test_plane_fill_keeps_a_recess_seen_past_nearer_surfaces(
     monkeypatch.undo()
     disp[inner[0]] = plane[inner[0]] + 1.5  # in front of the plane: no recess
     np.testing.assert_allclose(_plane_fill(disp, grey, 0, 16)[inner[0]], plane[inner[0]], atol=0.3)
+
+
+def test_the_plane_fills_kernels_are_their_numpy_twins_to_the_bit(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The plane fill's sums, photometric spread and hidden share (numba kernels) give the
+    same numbers as the NumPy code they replace (IMAGEFORM_DISABLE_NUMBA), bit for bit."""
+    rng = np.random.default_rng(11)
+    m, n = 7, 3000
+    seg = rng.integers(0, m, n).astype(np.intp)
+    xs, ys = rng.integers(0, 200, n).astype(np.intp), rng.integers(0, 90, n).astype(np.intp)
+    z = (3.0 + 0.04 * xs - 0.02 * ys + rng.normal(0.0, 0.8, n)).astype(np.float32)
+    grey = rng.uniform(0, 255, (90, 200)).astype(np.float32)
+    right = np.roll(grey, -3, axis=1) + rng.normal(0, 2, grey.shape).astype(np.float32)
+    disp = (5.0 + rng.uniform(-3.0, 3.0, grey.shape)).astype(np.float32)
+    disp[rng.uniform(size=grey.shape) < 0.2] = np.nan
+    lab = rng.integers(0, m, grey.shape).astype(np.int32)
+    lab[rng.uniform(size=grey.shape) < 0.5] = 0
+    take = rng.uniform(size=m) < 0.7
+
+    def run() -> list[np.ndarray]:
+        coef, fitted, weight = sm._fit_planes(seg, xs, ys, z, m, None, 3)
+        refit, ok, w2 = sm._fit_planes(seg, xs, ys, z, m, coef, 2)
+        plane = coef[seg, 0] * xs + coef[seg, 1] * ys + coef[seg, 2]
+        photo = sm._photo_ratio(grey, right, ys, xs, z, plane, seg, m)
+        hidden = sm._hidden_share(disp, lab, take, coef, m)
+        return [coef, fitted, weight, refit, ok, w2, photo, hidden]
+
+    a = run()
+    monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
+    b = run()
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(x, y)
+    grey2, plane2, _, faint = _flat_square_scene()
+    d2 = plane2 + faint.astype(np.float32) * 0.1
+    d2[::7, ::5] = np.nan
+    r2 = np.roll(grey2, -5, axis=1)
+    without = _plane_fill(d2, grey2, 0, 16, r2)
+    monkeypatch.delenv("IMAGEFORM_DISABLE_NUMBA")
+    np.testing.assert_array_equal(_plane_fill(d2, grey2, 0, 16, r2), without)

@@ -193,15 +193,9 @@ PLANS: dict[str, Plan] = {
                 " float64, uint16[:, :, ::1], boolean, int32[:, :, ::1])",
             ),
             Entry("sgm", "speckles", "(float32[:, ::1], int64, float64)"),
-            Entry("sgm", "median3", "(float32[:, ::1],)"),
         ),
         here=(
             Entry("sgm", "census", "(float32[:, ::1], int64, float32, float32)"),
-            Entry(
-                "sgm",
-                "cost_volume",
-                "(uint64[:, ::1], uint64[:, ::1], int64, int64, int64, uint8[:, :, ::1])",
-            ),
             Entry(
                 "sgm",
                 "window_costs",

@@ -49,8 +49,12 @@ __all__ = [
     "aggregate",
     "census",
     "cost_volume",
+    "hidden_share",
     "match",
     "median3",
+    "photo_spread",
+    "plane_sums",
+    "plane_weights",
     "popcount64",
     "select",
     "speckles",
@@ -604,4 +608,114 @@ def median3(disp):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
             p4 = max(p6, p4)
             p4 = min(p4, p2)
             o[x] = np.float32(np.nan) if p4 == low else p4
+    return out
+
+
+@njit
+def plane_weights(seg, x, y, z, coef, limit, weight):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Write ``weight[i]`` 1 where point ``i`` lies within ``limit`` px of its segment's plane.
+
+    The plane fill's inlier test (:func:`imageform.geometry.stereo_matching._fit_planes`):
+    ``|z - (a x + b y + c)| <= limit`` with ``(a, b, c) = coef[seg[i]]``, else 0 (float64).
+    """
+    for i in range(seg.size):
+        s = seg[i]
+        r = z[i] - (coef[s, 0] * x[i] + coef[s, 1] * y[i] + coef[s, 2])
+        weight[i] = 1.0 if abs(r) <= limit else 0.0
+
+
+@njit
+def plane_sums(seg, x, y, z, weight, sums):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Add each point's weighted moments to its segment's row of ``sums`` (float64, (m, 9)).
+
+    The columns ``x², x y, y², x, y, 1, x z, y z, z``, each times ``weight``, summed in the
+    points' order (``np.bincount``'s: the same sums to the last bit).
+    """
+    for i in range(seg.size):
+        s = seg[i]
+        w, xi, yi, zi = weight[i], x[i], y[i], z[i]
+        sums[s, 0] += w * (xi * xi)
+        sums[s, 1] += w * (xi * yi)
+        sums[s, 2] += w * (yi * yi)
+        sums[s, 3] += w * xi
+        sums[s, 4] += w * yi
+        sums[s, 5] += w
+        sums[s, 6] += w * (xi * zi)
+        sums[s, 7] += w * (yi * zi)
+        sums[s, 8] += w * zi
+
+
+@njit
+def photo_spread(left, right, ys, xs, d, seg, m):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Per segment ``mean |D - mean D|`` of ``D = L - R(x - d)`` (float64 ``(m,)``).
+
+    ``left`` the left pixels (float64, one per point), ``right`` the right image (float32,
+    H x W), interpolated linearly along its row at ``x - d`` clipped to the row, the point
+    ``i`` at ``ys[i], xs[i]`` in segment ``seg[i]`` (``_photo_ratio``'s ``E(d)``).
+    """
+    w = right.shape[1]
+    n = seg.size
+    cnt = np.zeros(m, dtype=np.int64)
+    mu = np.zeros(m)
+    diff = np.empty(n)
+    for i in range(n):
+        xr = min(max(xs[i] - d[i], 0.0), w - 1.0)
+        j0 = int(np.floor(xr))
+        f = xr - j0
+        j1 = min(j0 + 1, w - 1)
+        row = right[ys[i]]
+        v = left[i] - (row[j0] * (1.0 - f) + row[j1] * f)
+        diff[i] = v
+        mu[seg[i]] += v
+        cnt[seg[i]] += 1
+    out = np.zeros(m)
+    for s in range(m):
+        mu[s] = mu[s] / max(cnt[s], 1)
+    for i in range(n):
+        out[seg[i]] += abs(diff[i] - mu[seg[i]])
+    for s in range(m):
+        out[s] = out[s] / max(cnt[s], 1)
+    return out
+
+
+@njit
+def hidden_share(disp, lab, take, coef, limit):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Per segment the share of its pixels whose plane would hide a matched textured pixel.
+
+    ``_hidden_share``: the valid pixels outside the segments (``lab == 0``) claim the right
+    pixels ``floor(x - d)`` and ``ceil(x - d)`` with their lowest disparity; a pixel of a
+    segment ``k`` with ``take[k]`` whose plane ``p = coef[k] . (x, y, 1)`` lands (rounded half
+    to even) on a right pixel claimed by a disparity below ``p - limit`` hides it.
+    """
+    h, w = disp.shape
+    m = take.size
+    low = np.full(h * w, np.inf)
+    for y in range(h):
+        for x in range(w):
+            if lab[y, x] == 0:
+                v = disp[y, x]
+                if np.isfinite(v):
+                    d = np.float64(v)
+                    a = np.floor(x - d)
+                    if a >= 0 and a < w:
+                        at = y * w + int(a)
+                        low[at] = min(low[at], d)
+                    b = np.ceil(x - d)
+                    if b >= 0 and b < w:
+                        at = y * w + int(b)
+                        low[at] = min(low[at], d)
+    hides = np.zeros(m)
+    cnt = np.zeros(m, dtype=np.int64)
+    for y in range(h):
+        for x in range(w):
+            k = lab[y, x]
+            if k > 0 and take[k]:
+                p = coef[k, 0] * x + coef[k, 1] * y + coef[k, 2]
+                xr = np.rint(x - p)
+                cnt[k] += 1
+                if xr >= 0 and xr < w and p > low[y * w + int(xr)] + limit:
+                    hides[k] += 1.0
+    out = np.empty(m)
+    for k in range(m):
+        out[k] = hides[k] / max(cnt[k], 1)
     return out

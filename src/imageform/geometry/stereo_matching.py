@@ -18,6 +18,7 @@ correspondence", ECCV 1994.
 
 from __future__ import annotations
 
+import math
 from typing import Any, Literal
 
 import numpy as np
@@ -604,18 +605,27 @@ def _plane_fill(
     lab = np.where(keep[lab], lab, 0)
     if not lab.any():
         return disp
-    dist, (iy, ix) = ndimage.distance_transform_edt(lab == 0, return_indices=True)
-    near = lab[iy, ix]
-    rim = (lab == 0) & (dist <= PLANE_RIM)
+    # each pixel's nearest region pixel; the rim (within PLANE_RIM px) from the squared
+    # distances of the indices (SciPy's distances are their square roots: the same pixels)
+    iy, ix = ndimage.distance_transform_edt(lab == 0, return_distances=False, return_indices=True)
+    if max(h, w) >= 2**15:  # h² + w² past int32
+        iy, ix = iy.astype(np.int64), ix.astype(np.int64)
+    d2 = (iy - np.arange(h, dtype=iy.dtype)[:, None]) ** 2
+    d2 += (ix - np.arange(w, dtype=ix.dtype)) ** 2
+    rim = (lab == 0) & (d2 <= _rim_d2(PLANE_RIM))
+    at = np.flatnonzero(rim)  # the rim's pixels in raster order, their region and disparity
+    near = lab.ravel()[iy.ravel()[at].astype(np.intp) * w + ix.ravel()[at]]
+    d_rim = disp.ravel()[at]
     valid = np.isfinite(disp)
-    src = rim & valid
-    seg = near[src]
-    ys, xs = np.nonzero(src)
+    ok_rim = np.isfinite(d_rim)
+    seg = near[ok_rim]
+    ys, xs = np.divmod(at[ok_rim], w)
+    d_src = d_rim[ok_rim]
     m = n + 1
-    coef, fitted, weight = _fit_planes(seg, xs, ys, disp[src], m, None, 3)
+    coef, fitted, weight = _fit_planes(seg, xs, ys, d_src, m, None, 3)
     inliers = np.bincount(seg, weights=weight, minlength=m)
     used = np.bincount(seg, minlength=m)
-    rim_px = np.bincount(near[rim], minlength=m)
+    rim_px = np.bincount(near, minlength=m)
     take = fitted & (inliers >= PLANE_INLIER[1] * used) & (2 * used >= rim_px)
     take[0] = False
     if not take.any():
@@ -629,7 +639,7 @@ def _plane_fill(
         np.concatenate([seg, lab[inner]]),
         np.concatenate([xs, xi]),
         np.concatenate([ys, yi]),
-        np.concatenate([disp[src], disp[inner]]),
+        np.concatenate([d_src, disp[inner]]),
     )
     if PLANE_REFIT > 0:
         refit, ok, _ = _fit_planes(*both, m, coef, PLANE_REFIT)
@@ -640,7 +650,7 @@ def _plane_fill(
     if right is not None:
         take &= ~(_photo_ratio(grey, right, yi, xi, disp[inner], plane, k, m) > PLANE_PHOTO)
     take &= ~(_hidden_share(disp, lab, take, coef, m) > PLANE_HIDE)
-    take &= ~_recessed(disp[src], seg, xs, ys, coef, take, disp[inner] - plane, k, m)
+    take &= ~_recessed(d_src, seg, xs, ys, coef, take, disp[inner] - plane, k, m)
     x0 = min(max(min_d + n_d - 1, 0), w)
     x1 = max(min(w, w + min_d), x0)
     sel = take[lab]
@@ -651,6 +661,14 @@ def _plane_fill(
     out = disp.copy()
     out[yy, xx] = (coef[k, 0] * xx + coef[k, 1] * yy + coef[k, 2]).astype(np.float32)
     return out
+
+
+def _rim_d2(radius: float) -> int:
+    """Return the largest squared whole-pixel distance whose square root is within ``radius``."""
+    r2 = int(radius * radius) + 2
+    while r2 >= 0 and not math.sqrt(r2) <= radius:
+        r2 -= 1
+    return r2
 
 
 def _fit_planes(
@@ -670,17 +688,38 @@ def _fit_planes(
     weights (1 inlier, 0 not) against the last fit.
     """
     x, y, z = xs.astype(np.float64), ys.astype(np.float64), disp.astype(np.float64)
+    kern: Any = None
+    if use_numba(z):  # the sums in one pass over the points, the same to the last bit
+        from imageform._kernels import sgm
+
+        kern = sgm
+
+        seg = np.ascontiguousarray(seg, dtype=np.int64)
 
     def inliers(c: NDArray[np.float64]) -> NDArray[np.float64]:
+        if kern is not None:
+            wt = np.empty_like(z)
+            kern.plane_weights(seg, x, y, z, c, float(PLANE_INLIER[0]), wt)
+            return wt
         r = z - (c[seg, 0] * x + c[seg, 1] * y + c[seg, 2])
         return (np.abs(r) <= PLANE_INLIER[0]).astype(np.float64)
+
+    def moments(wt: NDArray[np.float64]) -> list[NDArray[np.float64]]:
+        if kern is not None:
+            sums = np.zeros((m, 9))
+            kern.plane_sums(seg, x, y, z, wt, sums)
+            return list(sums.T)
+        terms = (x * x, x * y, y * y, x, y, np.ones_like(x), x * z, y * z, z)
+        return [
+            np.asarray(np.bincount(seg, weights=wt * v, minlength=m), dtype=np.float64)
+            for v in terms
+        ]
 
     weight = np.ones_like(z) if coef is None else inliers(coef)
     out = np.zeros((m, 3))
     fitted = np.zeros(m, dtype=bool)
-    terms = np.stack([x * x, x * y, y * y, x, y, np.ones_like(x), x * z, y * z, z])
     for _ in range(passes):
-        t = [np.bincount(seg, weights=weight * v, minlength=m) for v in terms]
+        t = moments(weight)
         sxx, sxy, syy, sx, sy, s1 = t[:6]
         A = np.stack(
             [
@@ -717,8 +756,17 @@ def _photo_ratio(
     offset between the cameras counts for nothing); returns ``E(plane) / E(matched)``.
     """
     w = grey.shape[1]
-    cnt = np.maximum(np.bincount(seg, minlength=m), 1)
     left = grey[ys, xs].astype(np.float64)
+    if use_numba(left) and right.dtype == np.float32:
+        from imageform._kernels import sgm as kern
+
+        args = (np.ascontiguousarray(right), ys, xs)
+        sk = np.ascontiguousarray(seg, dtype=np.int64)
+        matched64 = matched.astype(np.float64)
+        return kern.photo_spread(left, *args, plane, sk, m) / np.maximum(
+            kern.photo_spread(left, *args, matched64, sk, m), 1e-6
+        )
+    cnt = np.maximum(np.bincount(seg, minlength=m), 1)
 
     def spread(d: NDArray[np.floating[Any]]) -> NDArray[np.float64]:
         xr = np.clip(xs - d.astype(np.float64), 0.0, w - 1.0)
@@ -746,6 +794,16 @@ def _hidden_share(
     disparity below ``p - 1`` would stand in front of that pixel, which the right view sees.
     """
     h, w = disp.shape
+    if use_numba(disp) and disp.dtype == np.float32:
+        from imageform._kernels import sgm as kern
+
+        return np.asarray(
+            kern.hidden_share(
+                np.ascontiguousarray(disp), np.ascontiguousarray(lab, dtype=np.int64),
+                np.ascontiguousarray(take), np.ascontiguousarray(coef, dtype=np.float64),
+                float(PLANE_INLIER[0]),
+            )
+        )  # fmt: skip
     src = (lab == 0) & np.isfinite(disp)
     ys, xs = np.nonzero(src)
     d = disp[src].astype(np.float64)
