@@ -3,9 +3,11 @@
 Run::
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python benchmarks/check_chart_real.py FOLDER \
-        [--no-variants | --no-peer-variants] [--peer-cache FILE.json]
+        [--no-variants | --no-peer-variants] [--peer-cache FILE.json] [--overlays DIR]
 
-``--no-variants`` leaves out the harder copies, ``--no-peer-variants`` runs only imageform on
+``--overlays DIR`` writes each photograph with imageform's detection drawn on it (patch
+centres numbered 1-24, patch 1 in red) for checking by eye. ``--no-variants`` leaves out the
+harder copies, ``--no-peer-variants`` runs only imageform on
 them (its "mcc found" column is then "-"); ``--peer-cache`` keeps the peers' answers
 (OpenCV's mcc, colour-checker-detection) in a JSON file and reuses them on the next run (they
 do not change between a before and an after run of imageform, and they are the slow part).
@@ -20,15 +22,21 @@ pedrodiamel/colorchecker-detection (1, MIT), QiuJueqin/color-checker-extraction 
 a ColorChecker Passport and a Digital SG, which is not a Classic) and 2vin/color-correction
 (1, MIT, a portrait without a chart).
 
-Per photograph: found or not and the time of :func:`detect_colorchecker`, and where OpenCV's
-``mcc`` detector (``cv2.mcc``, MCC24) finds the chart too, the median and largest difference
-of the patch means (8-bit units); whether colour-checker-detection's segmentation detector
-(``detect_colour_checkers_segmentation``) finds one; the mean CIEDE2000 of the measured
-patches (those not flagged missing or saturated; in brackets the least share of a usable
-patch's pixels that :func:`measure_chart_patches` averaged, leaving out marks) to the
-ColorChecker's published sRGB as
-they are and after :func:`fit_color_correction` (3 x 3 in linear light, fitted on them:
-how well a correction from this chart can do, and never worse than none).
+The photographs of chart-fresh-2026-12-01e come from alexandresoaresilva/auto_color_calibration,
+ian-ellis/colorchecker and agfianf/color-correction (tuning), riskiest/color_calibration,
+ij-plugins/ijp-javacv, Robert82310/ColorChecker-DoInfer-OnnxRuntime-, fahadnazmi/imgcolour and
+jeffliulab/Color_Calibration (held out); the table there names paths and commits.
+
+Per photograph: found or not (", mirrored" after the score: found with its columns reversed,
+as a webcam's mirrored preview shows it) and the time of :func:`detect_colorchecker`, and
+where OpenCV's ``mcc`` detector (``cv2.mcc``, MCC24) finds the chart too, the median and
+largest difference of the patch means (8-bit units); whether colour-checker-detection's
+segmentation detector (``detect_colour_checkers_segmentation``) finds one; the mean
+CIEDE2000 of the measured patches (those not flagged missing or saturated; in brackets the
+least share of a usable patch's pixels that :func:`measure_chart_patches` averaged, leaving
+out marks) to the ColorChecker's published sRGB as they are and after
+:func:`fit_color_correction` (3 x 3 in linear light, fitted on them: how well a correction
+from this chart can do, and never worse than none).
 
 Then the photographs that both detectors find are made harder, with the geometry known (the
 chart's centres of the original photograph carried through the change): turned 90, 180 and
@@ -55,6 +63,7 @@ import numpy as np
 
 from benchmarks._common import header, markdown_table
 from imageform.analysis import (
+    ChartDetection,
     ChartWarning,
     detect_colorchecker,
     fit_color_correction,
@@ -240,6 +249,25 @@ def _variants(
     return out
 
 
+def _overlay(im: np.ndarray, det: ChartDetection, path: Path) -> None:
+    """Write the photograph with the detection drawn: patch centres numbered 1-24 (patch 1,
+    the brown, in red), the lattice's outline through patches 1, 6, 24, 19 (for checking by
+    eye: orientation, centres on the patches)."""
+    from PIL import Image, ImageDraw
+
+    out = Image.fromarray(im)
+    draw = ImageDraw.Draw(out)
+    if det.found:
+        c = det.centers
+        r = max(2.0, 0.12 * _pitch(c))
+        draw.line([tuple(c[k]) for k in (0, 5, 23, 18, 0)], fill=(255, 0, 255), width=1)
+        for k, (u, v) in enumerate(c):
+            colour = (255, 0, 0) if k == 0 else (0, 255, 0)
+            draw.ellipse((u - r, v - r, u + r, v + r), outline=colour, width=2)
+            draw.text((u + r, v - r), str(k + 1), fill=(255, 255, 255))
+    out.save(path)
+
+
 def _found_at(im: np.ndarray, truth: np.ndarray) -> tuple[bool, float]:
     t0 = time.perf_counter()
     with warnings.catch_warnings():
@@ -253,7 +281,11 @@ def _found_at(im: np.ndarray, truth: np.ndarray) -> tuple[bool, float]:
 
 
 def main(
-    folder: str, variants: bool = True, peer_cache: str | None = None, peer_variants: bool = True
+    folder: str,
+    variants: bool = True,
+    peer_cache: str | None = None,
+    peer_variants: bool = True,
+    overlays: str | None = None,
 ) -> str:
     paths = sorted(
         p for p in Path(folder).iterdir() if p.suffix.lower() in {".jpg", ".jpeg", ".png"}
@@ -271,6 +303,9 @@ def main(
                 ours = measure_chart_patches(im, det).means if det.found else None
             except ValueError:  # every patch flagged: no means to compare
                 ours = None
+        if overlays is not None:
+            Path(overlays).mkdir(parents=True, exist_ok=True)
+            _overlay(im, det, Path(overlays) / (path.stem + ".png"))
         peer = peers.mcc(im)
         de = _delta_e00(im, det) if det.found else ("-", "-", "-")
         diff = "-"
@@ -283,7 +318,9 @@ def main(
                 path.name,
                 f"{im.shape[1]}x{im.shape[0]}",
                 "yes" if det.found else "no",
-                f"{det.score:.2f}" if det.found else det.reason,
+                (f"{det.score:.2f}" + (", mirrored" if getattr(det, "mirrored", False) else ""))
+                if det.found
+                else det.reason,
                 f"{dt:.2f}",
                 "yes" if peer is not None else "no",
                 diff,
@@ -342,13 +379,18 @@ if __name__ == "__main__":
         i = args.index("--peer-cache")
         cache = args[i + 1]
         del args[i : i + 2]
+    overlay_dir = None
+    if "--overlays" in args:
+        i = args.index("--overlays")
+        overlay_dir = args[i + 1]
+        del args[i : i + 2]
     with_variants = "--no-variants" not in args
     with_peers = "--no-peer-variants" not in args
     args = [a for a in args if a not in ("--no-variants", "--no-peer-variants")]
     if len(args) != 1:
         raise SystemExit(
             "usage: check_chart_real.py FOLDER_OF_PHOTOGRAPHS [--no-variants | "
-            "--no-peer-variants] [--peer-cache FILE.json]"
+            "--no-peer-variants] [--peer-cache FILE.json] [--overlays DIR]"
         )
     print(header("ColorChecker detection on real photographs"))
-    print(main(args[0], with_variants, cache, with_peers))
+    print(main(args[0], with_variants, cache, with_peers, overlay_dir))

@@ -23,6 +23,7 @@ from imageform._kernels.chart import (
 from imageform.analysis import (
     ChartDetection,
     ChartNotFoundError,
+    ChartPhoto,
     ChartWarning,
     chart_patches,
     detect_colorchecker,
@@ -266,3 +267,65 @@ def test_tiny_chart_found_on_the_upsample(seed: int) -> None:
     pitch = np.linalg.norm(photo.centers[1] - photo.centers[0])
     det = detect_colorchecker(photo.image)
     assert np.linalg.norm(det.centers - photo.centers, axis=1).max() < pitch / 6
+
+
+@pytest.mark.parametrize(("rotation", "seed"), [(0.0, 5), (90.0, 7), (200.0, 9)])
+def test_mirrored_chart_is_found_and_said_so(rotation: float, seed: int) -> None:
+    # a webcam's mirrored preview shows the chart with its columns reversed (12 of the
+    # tuning photographs of benchmarks/results/chart-fresh-2026-12-01e.md): no rotation of
+    # the printed chart matches its colours, the mirrored search does
+    photo = synthetic_chart_photo(rotation=rotation, tilt=20.0, width=0.4, rng=seed)
+    img = np.ascontiguousarray(photo.image[:, ::-1])
+    truth = np.c_[img.shape[1] - 1 - photo.centers[:, 0], photo.centers[:, 1]]
+    printed_only = detect_colorchecker(img, mirrored=False)
+    assert not printed_only.found and "R2" in printed_only.reason
+    det = detect_colorchecker(img)
+    assert det.found and det.mirrored and det.to_dict()["mirrored"] is True
+    assert np.linalg.norm(det.centers - truth, axis=1).max() < 1.0
+    assert np.linalg.det(det.homography[:2, :2]) < 0
+    pat = measure_chart_patches(img, det)
+    assert np.median(_de(pat.means, photo.patches)) < 1.0
+    # the chart as printed is found as such, and is not a mirrored chart
+    upright = detect_colorchecker(photo.image)
+    assert upright.found and not upright.mirrored
+    mirrored_only = detect_colorchecker(photo.image, mirrored=True)
+    assert not mirrored_only.found and "R2" in mirrored_only.reason
+    with pytest.raises(InvalidInputError, match="mirrored"):
+        detect_colorchecker(photo.image, mirrored="yes")  # type: ignore[arg-type]
+
+
+def _passport_layout(photo: ChartPhoto) -> np.ndarray:
+    """The photograph's upright chart with its first and third rows reversed (the layout of
+    the ColorChecker Passports in two public repositories' photographs)."""
+    img = np.array(photo.image)
+    c = np.asarray(photo.centers).reshape(4, 6, 2)
+    half = int(0.4 * np.median(np.diff(c[0, :, 0])))
+    src = img.copy()
+    for row in (0, 2):
+        for col in range(6):
+            (u, v), (u2, v2) = np.round(c[row, col]).astype(int), np.round(c[row, 5 - col])
+            v2, u2 = int(v2), int(u2)
+            img[v - half : v + half, u - half : u + half] = src[
+                v2 - half : v2 + half, u2 - half : u2 + half
+            ]
+    return img
+
+
+def test_greys_in_reverse_are_not_a_mirrored_chart() -> None:
+    # a chart whose first and third rows are reversed and its grey row not: read as a
+    # mirrored Classic, its white patch would be the black one, and the affine fit (a 3 x 3
+    # matrix and an offset) fits the inverted greys, the rows but one, at R2 0.99 (a
+    # ColorChecker Passport in chart-fresh-2026-12-01e's tuning half); a camera maps
+    # lightness monotonically, so the greys must descend as the reference's do
+    photo = synthetic_chart_photo(rotation=0.0, tilt=0.0, width=0.5, shading=0.0, rng=4)
+    img = _passport_layout(photo)
+    det = detect_colorchecker(img)
+    if det.found:  # not as a Classic: its greys in the right order
+        assert det.centers[18, 0] < det.centers[23, 0]
+        assert np.linalg.norm(det.centers - photo.centers, axis=1).max() < 1.0
+    # the layout is found with its own reference (the cells' colours, row by row)
+    ref = REF.reshape(4, 6, 3).copy()
+    ref[[0, 2]] = ref[[0, 2], ::-1]
+    own = detect_colorchecker(img, reference=ref.reshape(24, 3))
+    assert own.found and not own.mirrored
+    assert np.linalg.norm(own.centers - photo.centers, axis=1).max() < 1.0

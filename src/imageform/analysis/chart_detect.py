@@ -42,9 +42,11 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    without the costlier fits of steps 6 and 7.
 5. **Chart, orientation and validity by colour.** Every 4 × 6 window of the lattice in
    either of its two chart orientations (the two quarter turns the window's shape allows;
-   never mirrored: the basis is right-handed like the image) whose homography can be a
+   the chart as printed: the basis is right-handed like the image) whose homography can be a
    camera's view of a flat chart (the whole chart on one side of the vanishing line, no
-   patch over 40 times the image area of another) is sampled, and the reference
+   patch over 40 times the image area of another) and whose neutral row is brighter where
+   the reference's is (the ranks' correlation positive: a camera maps lightness
+   monotonically, an affine fit can also fit it inverted) is sampled, and the reference
    colours are regressed on the measured ones with an affine map in linear light
    (a 3 × 3 matrix and an offset per channel). A patch is an outlier (an occluder, a
    reflection) when the fit of the *other* patches predicts its colour more than
@@ -77,9 +79,14 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    photographs without a chart in benchmarks/results/chart-real-2026-11-29h.md scores 0.70
    so, 0.66 plain). Steps 6 and 7 are both tried and the higher score that passes wins (a
    chart with a mark on every patch has no plain fit at all: the colour homography of a
-   lattice of clutter beside it must not win by default). Otherwise the detection comes
-   back with ``found`` False and the reason (a photograph without a chart is an answer, not
-   an error).
+   lattice of clutter beside it must not win by default).
+8. **A mirrored chart.** When steps 5-7 find no chart at either resolution, they are run
+   once more on the same candidates for a chart with its columns reversed (a webcam's
+   mirrored preview, a photograph flipped left to right: 26 of 58 tuning photographs in
+   benchmarks/results/chart-fresh-2026-12-01e.md, whose colours no rotation of the printed
+   chart matches, R² 0.24-0.63), with the same tests; a chart found so has ``mirrored``
+   True. Otherwise the detection comes back with ``found`` False and the reason (a
+   photograph without a chart is an answer, not an error).
 
 Coordinates are imageform's pixel convention (docs/conventions.md): ``(u, v)`` = (column,
 row), integer values at pixel centres. Chart coordinates are ``(column, row)`` of the
@@ -171,17 +178,23 @@ class ChartDetection:
     #: ones (1 is perfect).
     score: float
     #: In-plane rotation of the chart in degrees, (-180, 180]: the image direction of the
-    #: chart's rows (left to right), clockwise from the image's +u axis as seen on screen.
+    #: chart's rows (left to right; from patch 1 to patch 6 on a mirrored chart), clockwise
+    #: from the image's +u axis as seen on screen.
     rotation: float
     #: True when a chart was found; False when the image shows none (the other fields are
     #: then NaN / False).
     found: bool = True
     #: Why no chart was found, in one line ("" when found).
     reason: str = ""
+    #: True when the chart was found mirrored (its columns reversed, as a webcam's mirrored
+    #: preview shows it); the homography then has a negative determinant and ``corners``
+    #: are still the corners of the chart's patches 1, 6, 24 and 19 (outer corners).
+    mirrored: bool = False
 
     def __post_init__(self) -> None:
         """Arrays to float64/bool of the documented shapes (finite when found)."""
         object.__setattr__(self, "found", as_bool(self.found, "found"))
+        object.__setattr__(self, "mirrored", as_bool(self.mirrored, "mirrored"))
         if not isinstance(self.reason, str):
             raise InvalidInputError(f"expected reason as a str, got {describe(self.reason)}")
         shapes = {"homography": (3, 3), "corners": (4, 2), "centers": (24, 2), "quads": (24, 4, 2)}
@@ -212,6 +225,7 @@ class ChartDetection:
                 "outliers": self.outliers.tolist(),
                 "score": None,
                 "rotation_degrees": None,
+                "mirrored": False,
             }
         return {
             "found": True,
@@ -224,6 +238,7 @@ class ChartDetection:
             "outliers": self.outliers.tolist(),
             "score": self.score,
             "rotation_degrees": self.rotation,
+            "mirrored": self.mirrored,
         }
 
 
@@ -621,7 +636,8 @@ def _cell_area(h: np.ndarray, keys: np.ndarray) -> np.ndarray:
 
 #: Chart (column, row) -> lattice (u, v) for the four quarter turns, as 3x3 affine maps
 #: applied after the window offset: rotation 0 and 180 need a 6-wide window, 90 and 270 a
-#: 4-wide one. All have determinant +1 (a chart is never mirrored).
+#: 4-wide one. All have determinant +1 (the chart as printed); a mirrored chart's maps are
+#: these after :data:`_MIRROR` (determinant -1).
 def _turn(quarter: int, u0: float, v0: float) -> np.ndarray:
     m = {
         0: [[1, 0, 0], [0, 1, 0]],
@@ -634,6 +650,10 @@ def _turn(quarter: int, u0: float, v0: float) -> np.ndarray:
     a[1, 2] += v0
     return a
 
+
+#: Chart (column, row) -> (column, row) of the chart seen in a mirror: its columns reversed
+#: (a webcam's mirrored preview, a photograph flipped left to right).
+_MIRROR = np.array([[-1.0, 0.0, _COLS - 1], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
 
 _GRID = np.stack(np.meshgrid(np.arange(_COLS), np.arange(_ROWS)), axis=-1).reshape(-1, 2)
 _OFFS = np.stack(np.meshgrid(np.linspace(-0.2, 0.2, 5), np.linspace(-0.2, 0.2, 5)), -1).reshape(
@@ -948,6 +968,27 @@ def _plausible_view(hc: np.ndarray) -> bool:
     return bool(area.min() > 0 and area.max() <= _MAX_AREA_RATIO * area.min())
 
 
+def _greys_descend(mean: np.ndarray, ref_lin: np.ndarray, least: float = 0.0) -> bool:
+    """Whether the window's neutral row is brighter where the reference's is (rank order).
+
+    A camera maps lightness monotonically, but the affine colour fit (a 3 x 3 matrix and an
+    offset) can also fit an inverted one: a chart of another layout whose grey row runs the
+    other way (a ColorChecker Passport read as a mirrored Classic: its white patch taken for
+    the black, its other rows fitted but one, R² 0.99 on a tuning photograph of
+    benchmarks/results/chart-fresh-2026-12-01e.md). The Spearman correlation of the six
+    neutral patches' measured brightness with the reference's must be over ``least``: 0
+    (one patch out of place, a hand over it or glare on it, keeps it positive), -0.5 for
+    the colour homography with its light per patch (a shadow over part of the grey row
+    scrambles its order, an inverted row is -1).
+    """
+    k = np.arange(_ROWS * _COLS - _COLS, _ROWS * _COLS)
+    got = mean[k].sum(axis=1)
+    want = ref_lin[k].sum(axis=1)
+    rank_got = np.argsort(np.argsort(got, kind="stable"), kind="stable")
+    rank_want = np.argsort(np.argsort(want, kind="stable"), kind="stable")
+    return bool(np.corrcoef(rank_got, rank_want)[0, 1] > least)
+
+
 def _best_window(
     work: np.ndarray,
     h: np.ndarray,
@@ -956,11 +997,12 @@ def _best_window(
     shading: bool = False,
     trim: bool = False,
     robust: bool = True,
+    mirror: bool = False,
 ) -> tuple[float, np.ndarray, np.ndarray] | None:
     """Best (score, chart->lattice map, outliers) over windows and quarter turns.
 
     ``robust`` False: the affine fit without the least-median retry (a periodic texture's
-    lattice).
+    lattice). ``mirror``: the windows of a mirrored chart instead (columns reversed).
     """
     umin, vmin = keys.min(axis=0).astype(int)
     umax, vmax = keys.max(axis=0).astype(int)
@@ -984,11 +1026,13 @@ def _best_window(
         for (u0, v0), cnt in zip(placements, counts, strict=True):
             if cnt < max(top - 2, 6) or (shading and cnt < _SHADING_MIN_SEGMENTED):
                 continue
-            a = _turn(quarter, u0, v0)
+            a = _turn(quarter, u0, v0) @ _MIRROR if mirror else _turn(quarter, u0, v0)
             hc = h @ a
             if not _plausible_view(hc):
                 continue
             mean, spread = _sample(work, hc, trim)
+            if not _greys_descend(mean, ref_lin, -0.5 if shading else 0.0):
+                continue
             usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
             r2, out = _window_fit(mean, ref_lin, usable, shading, robust)
             if best is None or r2 > best[0]:
@@ -1022,15 +1066,21 @@ def _on_lattice(
 
 
 def _search(
-    work: np.ndarray, ref_lin: np.ndarray, min_score: float
+    work: np.ndarray,
+    ref_lin: np.ndarray,
+    min_score: float,
+    mirror: bool = False,
+    cand: dict[str, np.ndarray] | None = None,
 ) -> tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None] | str:
-    """Search the work image for the chart.
+    """Search the work image for the chart (``mirror``: for a mirrored chart).
 
     Returns (score, chart -> work homography, outliers, chart coordinates of the segmented
     patches, the light on each patch over its median when the chart was accepted only by the
-    colour homography of :func:`_shading_fit`, else None), or why none was found.
+    colour homography of :func:`_shading_fit`, else None), or why none was found. ``cand``:
+    the work image's candidates when they are known (the mirrored search of the same image).
     """
-    cand = _candidates(work)
+    if cand is None:
+        cand = _candidates(work)
     n_cand = len(cand["area"])
     if n_cand < 6:
         return f"{n_cand} flat square region(s) in the image, a ColorChecker shows 24"
@@ -1063,7 +1113,7 @@ def _search(
         if not texture:
             attempts += 1
             lattices.append(grown)
-        win = _best_window(work, h, keys, ref_lin, robust=not texture)
+        win = _best_window(work, h, keys, ref_lin, robust=not texture, mirror=mirror)
         if win is None:
             continue
         r2, a, out = win
@@ -1086,10 +1136,10 @@ def _search(
         # least-squares fit only: the costlier fits are for lattices of a chart's size
         shaded = trimmed = None
         for h, idx, keys in lattices:
-            win = _best_window(work, h, keys, ref_lin, shading=True)
+            win = _best_window(work, h, keys, ref_lin, shading=True, mirror=mirror)
             if win is not None and (shaded is None or win[0] > shaded[0]):
                 shaded = (win[0], h, win[1], idx, keys, win[2])
-            win = _best_window(work, h, keys, ref_lin, trim=True)
+            win = _best_window(work, h, keys, ref_lin, trim=True, mirror=mirror)
             if win is not None and (trimmed is None or win[0] > trimmed[0]):
                 trimmed = (win[0], h, win[1], idx, keys, win[2])
         need = max(min_score, _TRIMMED_MIN_SCORE)
@@ -1132,6 +1182,7 @@ def detect_colorchecker(
     max_size: int = 1024,
     min_score: float = 0.8,
     sample: float = 0.5,
+    mirrored: bool | None = None,
 ) -> ChartDetection:
     """Find a ColorChecker Classic (4 × 6) anywhere in a photograph.
 
@@ -1157,6 +1208,13 @@ def detect_colorchecker(
     sample : float, keyword-only
         Side of the sampling square in patch pitches (the patches are about 0.85 pitch
         wide): the quads :func:`measure_chart_patches` averages.
+    mirrored : bool or None, keyword-only
+        Whether the chart may be seen mirrored (its columns reversed: a webcam's mirrored
+        preview, a photograph flipped left to right, a mirror). None (default): the chart
+        as printed is searched first and, only when none is found, a mirrored one (on the
+        same segmentation); False: as printed only (imageform 0.1's search); True: mirrored
+        only. The detection says which it found (``ChartDetection.mirrored``); its patch
+        ``k`` is the chart's patch ``k`` either way.
 
     Returns
     -------
@@ -1198,6 +1256,8 @@ def detect_colorchecker(
     max_size = as_int(max_size, "max_size", minimum=64, maximum=100_000)
     min_score = as_real(min_score, "min_score", minimum=-1.0, maximum=1.0)
     sample = as_real(sample, "sample", positive=True, maximum=1.0)
+    if mirrored is not None:
+        mirrored = as_bool(mirrored, "mirrored")
     ref = (
         np.asarray(COLORCHECKER_SRGB8, dtype=np.float64) / 255.0
         if reference is None
@@ -1210,30 +1270,22 @@ def detect_colorchecker(
         return _not_found(
             f"image of {rgb.shape[0]}x{rgb.shape[1]} pixels is too small to hold a colour chart"
         )
-    work, f = _work_image(rgb, max_size, full)
-    # work pixel -> image pixel (pixel centres): block means of f x f pixels
-    scale = np.array([[f, 0.0, (f - 1) / 2.0], [0.0, f, (f - 1) / 2.0], [0.0, 0.0, 1.0]])
-    res = _search(work, ref_lin, min_score)
-    if not isinstance(res, tuple) and f > 1:
-        # not found on the block means: a chart of under about 10 * f pixels per patch in a
-        # large photograph merged into its surround; once more at twice the resolution
-        fine, f_fine = _work_image(rgb, 2 * max_size, full)
-        res_fine = _search(fine, ref_lin, min_score)
-        if isinstance(res_fine, tuple):
-            res, work, f = res_fine, fine, f_fine
-            scale = np.array([[f, 0.0, (f - 1) / 2.0], [0.0, f, (f - 1) / 2.0], [0.0, 0.0, 1.0]])
-    elif not isinstance(res, tuple):
-        # not found at full resolution: small charts (patch pitch under about 12 pixels)
-        # separate better on a 2x bilinear upsample (o -> o / 2 - 0.25 in image pixels)
-        from scipy import ndimage
-
-        up = ndimage.zoom(work, (2, 2, 1), order=1, grid_mode=True, mode="nearest")
-        res_up = _search(up, ref_lin, min_score)
-        if isinstance(res_up, tuple):
-            res, work = res_up, up
-            scale = np.array([[0.5, 0.0, -0.25], [0.0, 0.5, -0.25], [0.0, 0.0, 1.0]])
+    # upright first; a mirrored chart only where no upright one is found (on the same
+    # candidates: segmentation and lattices do not depend on the chart's handedness)
+    mirrors = {None: (False, True), False: (False,), True: (True,)}[mirrored]
+    stages: dict[str, tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]] = {}
+    reasons: list[str] = []
+    for mirror in mirrors:
+        res, scale = _find(rgb, full, ref_lin, max_size, min_score, mirror, stages)
+        if isinstance(res, tuple):
+            break
+        reasons.append(res if not reasons else f"mirrored: {res.split(' (')[0]}")
+        if res.startswith(_NO_LATTICE_REASONS):
+            break  # no lattice for a chart of either handedness
+    else:
+        return _not_found(reasons[0] + "".join(f" ({r})" for r in reasons[1:]))
     if not isinstance(res, tuple):
-        return _not_found(res)
+        return _not_found(reasons[0])
     r2, hc, out, chart_xy, light = res
     if light is not None:
         import warnings
@@ -1259,7 +1311,63 @@ def detect_colorchecker(
     rot = float(np.degrees(np.arctan2(row_dir[0, 1], row_dir[0, 0])))
     if rot <= -180.0:
         rot += 360.0
-    return ChartDetection(hf, corners, centres, quads, segmented, out, float(r2), rot)
+    return ChartDetection(
+        hf, corners, centres, quads, segmented, out, float(r2), rot, mirrored=bool(mirror)
+    )
+
+
+#: Reasons of a search that found no lattice at all: the mirrored search, on the same
+#: candidates, would find none either.
+_NO_LATTICE_REASONS = ("no 4x6 lattice", "0 flat", "1 flat", "2 flat", "3 flat", "4 flat", "5 flat")
+
+
+def _find(
+    rgb: np.ndarray,
+    full: float,
+    ref_lin: np.ndarray,
+    max_size: int,
+    min_score: float,
+    mirror: bool,
+    stages: dict[str, tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]],
+) -> tuple[tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None] | str, np.ndarray]:
+    """Search at the resolutions of :func:`detect_colorchecker`: (result, work -> image).
+
+    ``stages`` keeps each resolution's work image, its map to the image and its candidates
+    for the next call (the mirrored search of the same photograph).
+    """
+
+    def stage(name: str) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        if name not in stages:
+            if name == "up":
+                # small charts (patch pitch under about 12 pixels) separate better on a 2x
+                # bilinear upsample (o -> o / 2 - 0.25 in image pixels)
+                from scipy import ndimage
+
+                work = ndimage.zoom(
+                    stage("work")[0], (2, 2, 1), order=1, grid_mode=True, mode="nearest"
+                )
+                scale = np.array([[0.5, 0.0, -0.25], [0.0, 0.5, -0.25], [0.0, 0.0, 1.0]])
+            else:
+                work, f = _work_image(rgb, max_size if name == "work" else 2 * max_size, full)
+                # work pixel -> image pixel (pixel centres): block means of f x f pixels
+                scale = np.array(
+                    [[f, 0.0, (f - 1) / 2.0], [0.0, f, (f - 1) / 2.0], [0.0, 0.0, 1.0]]
+                )
+            stages[name] = (work, scale, _candidates(work))
+        return stages[name]
+
+    work, scale, cand = stage("work")
+    res = _search(work, ref_lin, min_score, mirror, cand)
+    if isinstance(res, tuple):
+        return res, scale
+    # not found on the block means: a chart of under about 10 * f pixels per patch in a
+    # large photograph merged into its surround, once more at twice the resolution; not
+    # found at full resolution, once more on the 2x upsample
+    fine, fscale, fcand = stage("fine" if scale[0, 0] > 1 else "up")
+    res_fine = _search(fine, ref_lin, min_score, mirror, fcand)
+    if isinstance(res_fine, tuple):
+        return res_fine, fscale
+    return res, scale
 
 
 def _quad_mask_bounds(quad: np.ndarray, hgt: int, wid: int) -> tuple[slice, slice, np.ndarray]:

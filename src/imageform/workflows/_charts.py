@@ -233,4 +233,5 @@ def summary(chart: ChartInput) -> dict[str, Any]:
         if chart.sample.detection is not None:
             d["score"] = chart.sample.detection.score
             d["rotation_degrees"] = chart.sample.detection.rotation
+            d["mirrored"] = chart.sample.detection.mirrored
     return d

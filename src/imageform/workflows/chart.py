@@ -237,6 +237,7 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
         "correction": opts.correction,
         "score": det.score,
         "rotation_degrees": det.rotation,
+        "mirrored": det.mirrored,
         "corners": det.corners,
         "patches_found": int(det.segmented.sum()),
         "patches_valid": int(pat.valid.sum()),
@@ -248,7 +249,8 @@ def chart(run: Run, opts: ChartOptions, *, out: Path, image: Path) -> Result:
         **stats,
     }
     text = [
-        f"ColorChecker found: score R2 {det.score:.4f}, rotation {det.rotation:.1f} deg, "
+        f"ColorChecker found{' mirrored' if det.mirrored else ''}: score R2 {det.score:.4f}, "
+        f"rotation {det.rotation:.1f} deg, "
         f"{int(det.segmented.sum())} of 24 patches segmented, {int(pat.valid.sum())} usable"
         + (f", {n_out} left out" if n_out else ""),
         "corners (u, v): " + ", ".join(f"({u:.1f}, {v:.1f})" for u, v in det.corners),
