@@ -18,6 +18,14 @@ Run::
 
 ``--time TILE``: the median of 15 runs of ``tissue_mask(TILE)`` after one warm-up (ms).
 
+``--levels TARGET``: Macenko normalisation of each image of ``TILE_DIR`` at several pixel
+sizes against ``TARGET`` (a dense tile at full resolution), with the concentrations matched
+by their 99th percentile (``reference="max"``) or their mean (``"mean"``). Each image is
+area-averaged 2, 4 and 8 times (a slide's pyramid levels; an Aperio SVS also at its
+scanner-made thumbnail, the second page). Per level: the CIEDE2000 between the mean tissue
+colour (CIELAB, over ``tissue_mask``) of the output and of the full-resolution output, and
+to the target's mean tissue colour. The same slide should come out the same at any level.
+
 The held-out set of ``benchmarks/results/stain-scale-2026-11-30h.md`` (two repositories
 nobody here used, their SHA-256 written down before anything ran on them, run once with
 the final code and once with main's):
@@ -85,12 +93,81 @@ def _timing(path: Path) -> float:
     return 1e3 * float(np.median(runs))
 
 
+def _down(img: np.ndarray, k: int) -> np.ndarray:
+    """Area average of k x k pixels (in the encoded values, as a slide's pyramid)."""
+    if k == 1:
+        return img
+    h, w = img.shape[0] // k, img.shape[1] // k
+    blocks = img[: h * k, : w * k].astype(np.float64).reshape(h, k, w, k, 3)
+    return np.round(blocks.mean(axis=(1, 3))).astype(np.uint8)
+
+
+def _levels_of(path: Path) -> list[tuple[str, np.ndarray]]:
+    if path.suffix.lower() == ".svs":
+        import tifffile
+
+        with tifffile.TiffFile(path) as tif:
+            base, thumb = tif.pages[0].asarray(), tif.pages[1].asarray()
+        levels = [(f"1/{k}", _down(base, k)) for k in (1, 2, 4, 8)]
+        ratio = base.shape[1] / thumb.shape[1]
+        return [*levels, (f"thumbnail 1/{ratio:.2f}", thumb)]
+    img = _read(path)
+    return [(f"1/{k}", _down(img, k)) for k in (1, 2, 4, 8)]
+
+
+def _levels(paths: list[Path], target_path: Path) -> list[list[str]]:
+    from imageform.analysis import macenko_normalize, macenko_stains, tissue_mask
+    from imageform.color import delta_e_ciede2000, srgb8_to_lab
+
+    def mean_lab(img8: np.ndarray, mask: np.ndarray) -> np.ndarray:
+        return np.asarray(srgb8_to_lab(img8), dtype=np.float64)[mask].mean(axis=0)
+
+    target = _read(target_path)
+    tgt = macenko_stains(target)
+    t_lab = mean_lab(target, tissue_mask(target))
+    rows = []
+    for p in paths:
+        first: dict[str, np.ndarray] = {}
+        for name, img in _levels_of(p):
+            h, w, _ = img.shape
+            row = [p.stem, name, f"{w}x{h}"]
+            try:
+                st = macenko_stains(img)
+                mask = tissue_mask(img)
+                row.append(f"{st.max_concentrations[0]:.2f} / {st.mean_concentrations[0]:.2f}")
+                for ref in ("max", "mean"):
+                    out = macenko_normalize(img, tgt, source=st, reference=ref)
+                    out8 = np.clip(np.round(np.asarray(out) * 255), 0, 255).astype(np.uint8)
+                    lab = mean_lab(out8, mask)
+                    first.setdefault(ref, lab)
+                    d0 = float(delta_e_ciede2000(lab, first[ref]))
+                    row.append(f"{d0:.1f} / {float(delta_e_ciede2000(lab, t_lab)):.1f}")
+            except Exception as exc:  # a row, not a stop
+                row.append(f"{type(exc).__name__}: {exc}"[:80])
+            rows.append(row)
+    return rows
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("tiles", type=Path)
     ap.add_argument("--time", type=Path, default=None)
+    ap.add_argument("--levels", type=Path, default=None, metavar="TARGET")
     args = ap.parse_args()
     print(header("The default tissue mask across image sizes"))
+    if args.levels is not None:
+        files = sorted(p for p in args.tiles.iterdir() if p.suffix.lower() in {*SUFFIXES, ".svs"})
+        cols = [
+            "image",
+            "level",
+            "size",
+            "hematoxylin: 99th percentile / mean",
+            "reference max: dE00 to level 1/1's output / to target",
+            "reference mean: dE00 to level 1/1's output / to target",
+        ]
+        print(f"\n## Pyramid levels ({args.tiles.name}) against {args.levels.name}\n")
+        print(markdown_table(cols, _levels(files, args.levels)))
+        return
     if args.time is not None:
         print(f"\ntissue_mask({args.time.name}): median of 15 runs {_timing(args.time):.1f} ms\n")
         return

@@ -154,6 +154,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "stain-wash": "benchmarks/check_stain_wash.py",
     "stain-dye": "benchmarks/check_stain_dye.py",
     "stain-fold": "benchmarks/check_stain_fold.py",
+    "stain-ink": "benchmarks/check_stain_artefacts.py",
     "stereo-depth": "benchmarks/check_stereo_depth.py",
     "stereo-fresh": "benchmarks/check_stereo_fresh.py",
     "stereo-vertical": "benchmarks/check_stereo_vertical.py",

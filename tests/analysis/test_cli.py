@@ -131,6 +131,16 @@ def test_stain_normalize(tmp_path: Path, capsys, method: str) -> None:  # type: 
         == 0
     )
     np.testing.assert_array_equal(read_image(out2), read_image(out))
+    if method == "macenko":  # --scale-by mean: the API's reference="mean"
+        out4 = tmp_path / "out4.png"
+        argv = ["stain-normalize", str(pa), "-o", str(out4), "--target", str(stats)]
+        assert main([*argv, "--scale-by", "mean"]) == 0
+        from imageform.analysis import MacenkoStains, macenko_normalize
+
+        api = macenko_normalize(read_image(pa), MacenkoStains.from_json(stats), reference="mean")
+        got = read_image(out4).astype(np.float64)
+        assert np.abs(got - np.clip(np.asarray(api) * 255, 0, 255)).max() <= 1.0
+        assert not np.array_equal(read_image(out4), read_image(out))
     # the other method with these statistics: which method saved them, not 'got kind'
     other = "reinhard" if method == "macenko" else "macenko"
     argv = ["stain-normalize", str(pa), "-o", str(tmp_path / "o3.png"), "--method", other]

@@ -24,6 +24,7 @@ from imageform.analysis import (
     stain_angle,
     stain_concentrations,
     synthetic_stain_image,
+    vahadane_stains,
 )
 from imageform.analysis.synthetic import RUIFROK_DAB, RUIFROK_EOSIN, RUIFROK_HEMATOXYLIN
 from imageform.errors import DegenerateConfigurationError, InvalidInputError, UnknownOptionError
@@ -139,6 +140,63 @@ def test_macenko_json_round_trip_and_path_target(tmp_path: Path) -> None:
     np.testing.assert_array_equal(
         macenko_normalize(a, p, transparent="norm"), macenko_normalize(a, st, transparent="norm")
     )
+
+
+def _nuclei_tile(size: int = 512, seed: int = 0) -> np.ndarray:
+    """Dense round nuclei (hematoxylin 1-2.5, 3 px radius) on eosin stroma, glass: I0 = 1."""
+    gen = np.random.default_rng(seed)
+    yy, xx = np.mgrid[0:size, 0:size]
+    h = np.zeros((size, size))
+    centres, dens = gen.uniform(0, size, (400, 2)), gen.uniform(1.0, 2.5, 400)
+    for (cy, cx), v in zip(centres, dens, strict=True):
+        h = np.maximum(h, v * ((yy - cy) ** 2 + (xx - cx) ** 2 <= 9.0))
+    e = np.where(h > 0, 0.05, 0.45 + 0.1 * gen.random((size, size)))
+    glass = (xx - size / 2) ** 2 + (yy - size / 2) ** 2 > (0.45 * size) ** 2
+    c = np.stack([np.where(glass, 0.0, h), np.where(glass, 0.0, e)], axis=-1)
+    s = np.array([RUIFROK_HEMATOXYLIN, RUIFROK_EOSIN], dtype=np.float64)
+    s /= np.linalg.norm(s, axis=1, keepdims=True)
+    return np.exp(-(c @ s))
+
+
+def test_macenko_mean_reference_is_the_same_at_any_pixel_size(tmp_path: Path) -> None:
+    """A slide's lower pyramid level averages its nuclei with the stroma: their 99th
+    percentile falls, the mean does not. Normalised against itself at full resolution, the
+    8x area-averaged tile comes out darker by the percentiles, as it was by the means."""
+    full = _nuclei_tile()
+    small = full.reshape(64, 8, 64, 8, 3).mean(axis=(1, 3))
+    tgt = macenko_stains(full, i0=1.0, mask="none", transparent="norm")
+    src = macenko_stains(small, i0=1.0, mask="none", transparent="norm")
+    assert tgt.mean_concentrations is not None and src.mean_concentrations is not None
+    # the hematoxylin's percentile falls with the pixel size, its mean stays
+    assert src.max_concentrations[0] < 0.5 * tgt.max_concentrations[0]  # 2.26 -> 0.97
+    np.testing.assert_allclose(src.mean_concentrations, tgt.mean_concentrations, rtol=0.1)
+    tissue = np.linalg.norm(-np.log(small), axis=-1) > 0.15
+    out_max = macenko_normalize(small, tgt, source=src)
+    out_mean = macenko_normalize(small, tgt, source=src, reference="mean")
+    od_in = -np.log(small[tissue]).mean()
+    assert -np.log(out_max[tissue]).mean() > 1.3 * od_in  # too dark: 1.34
+    # the area average of intensities loses a little OD (Jensen): 1.08
+    assert abs(-np.log(out_mean[tissue]).mean() / od_in - 1.0) < 0.1
+    # saved and loaded with the stains; a file without them cannot be matched by the mean
+    p = tmp_path / "t.json"
+    tgt.to_json(p)
+    np.testing.assert_array_equal(
+        MacenkoStains.from_json(p).mean_concentrations, tgt.mean_concentrations
+    )
+    old = MacenkoStains(tgt.stain_matrix, tgt.max_concentrations, i0=tgt.i0)
+    with pytest.raises(InvalidInputError, match="mean_concentrations"):
+        macenko_normalize(small, old, source=src, reference="mean")
+    with pytest.raises(UnknownOptionError, match="concentration reference"):
+        macenko_normalize(small, tgt, source=src, reference="p50")  # type: ignore[arg-type]
+
+
+def test_macenko_mean_concentrations_dask_equal_memory() -> None:
+    da = pytest.importorskip("dask.array")
+    img = _nuclei_tile(128)
+    for fn, kw in ((macenko_stains, {"transparent": "norm"}), (vahadane_stains, {})):
+        mem = fn(img, i0=1.0, **kw)
+        lazy = fn(da.from_array(img, chunks=(48, 48, 3)), i0=1.0, **kw)
+        np.testing.assert_allclose(lazy.mean_concentrations, mem.mean_concentrations, rtol=1e-9)
 
 
 def test_macenko_without_tissue_raises() -> None:

@@ -478,7 +478,10 @@ class MacenkoStains:
     units) and the estimator ``method``. ``n_pixels`` of the ``n_total`` pixels passed the
     transparent-pixel threshold. ``i0_source`` says where ``i0`` came from (:data:`I0_SOURCES`):
     ``"glass"`` (measured on the slide), ``"default"`` (no glass found: 240/255, the reference
-    code's) or ``"given"``.
+    code's) or ``"given"``. ``mean_concentrations``: each stain's mean concentration over the
+    same pixels as the percentile (the scale-invariant reference of
+    :func:`macenko_normalize`'s ``reference="mean"``); None when unknown (a JSON file written
+    before it).
     """
 
     stain_matrix: np.ndarray
@@ -489,6 +492,7 @@ class MacenkoStains:
     method: str = "macenko"
     n_total: int = 0
     i0_source: str = "given"
+    mean_concentrations: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         """Two finite stain vectors of non-zero length, two finite concentrations."""
@@ -506,6 +510,9 @@ class MacenkoStains:
             self, "method", check_option(self.method, STAIN_VECTOR_METHODS, "method")
         )
         object.__setattr__(self, "i0_source", check_option(self.i0_source, I0_SOURCES, "i0_source"))
+        if self.mean_concentrations is not None:
+            mean = real_array(self.mean_concentrations, "mean_concentrations", (2,))
+            object.__setattr__(self, "mean_concentrations", mean)
 
     def to_json(self, path: str | Path) -> None:
         """Save as JSON (``kind: "macenko_stains"``)."""
@@ -521,6 +528,11 @@ class MacenkoStains:
                 "method": str(self.method),
                 "n_total": int(self.n_total),
                 "i0_source": str(self.i0_source),
+                **(
+                    {}
+                    if self.mean_concentrations is None
+                    else {"mean_concentrations": np.asarray(self.mean_concentrations).tolist()}
+                ),
             },
         )
 
@@ -541,13 +553,17 @@ class MacenkoStains:
             method = check_option(str(d.get("method", "macenko")), STAIN_VECTOR_METHODS, "method")
             n_total = int(d.get("n_total", 0))
             i0_source = check_option(str(d.get("i0_source", "given")), I0_SOURCES, "i0_source")
+            mean = d.get("mean_concentrations")
+            mean = None if mean is None else np.asarray(mean, dtype=np.float64)
         except (KeyError, TypeError, ValueError) as exc:
             raise InvalidInputError(f"malformed Macenko stains in {path}: {exc}") from exc
         if m.shape != (2,):
             raise InvalidInputError(f"expected 2 max_concentrations in {path}, got {m.shape}")
         i0t = (float(i0[0]), float(i0[1]), float(i0[2]))
         s64 = np.asarray(s, dtype=np.float64)
-        return cls(s64, m, n, i0t, base, method, n_total, i0_source)
+        if mean is not None and mean.shape != (2,):
+            raise InvalidInputError(f"expected 2 mean_concentrations in {path}, got {mean.shape}")
+        return cls(s64, m, n, i0t, base, method, n_total, i0_source, mean)
 
     @property
     def fraction(self) -> float:
@@ -709,8 +725,8 @@ _GLASS_TOLERANCE = 0.04
 
 def _max_conc(
     od: Any, stains: np.ndarray, percentile: float, base: str, use: Any = None
-) -> np.ndarray:
-    """Percentile of each stain's concentration over the pixels that are not glass.
+) -> tuple[np.ndarray, np.ndarray]:
+    """Percentile and mean of each stain's concentration over the pixels that are not glass.
 
     Glass (every channel's OD within 0.04 of 0) holds no stain: counted,
     it would lower the percentile with the share of glass in the tile, and a tile that is
@@ -722,8 +738,8 @@ def _max_conc(
     keep = (abs(flat) > tol).any(axis=1)
     if use is not None:
         keep = keep & use
-    tissue = c[keep]
-    return np.percentile(tissue if tissue.shape[0] else c, percentile, axis=0)
+    tissue = c[keep] if keep.any() else c
+    return np.percentile(tissue, percentile, axis=0), tissue.mean(axis=0)
 
 
 class _LazyFit:
@@ -755,6 +771,7 @@ class _LazyFit:
             glass = self._tissue(flat, u)
             out = {
                 "sum:n": np.array([w.sum(), 0.0 if u is None else (~u).sum(), glass.sum()]),
+                "sum:st": np.stack([flat[glass].sum(axis=0), flat.sum(axis=0)]),
                 "sum:s1": (flat * w[:, None]).sum(axis=0),
                 "sum:s2": np.array(
                     [(flat[:, i] * flat[:, j] * w).sum() for i in range(3) for j in range(i, 3)]
@@ -769,7 +786,7 @@ class _LazyFit:
 
         got = self.blocks.run(stats, index=tissue, keep_mask=True)
         self.n, self.lost, self.n_tissue = (int(v) for v in got["sum:n"])
-        self.s1, self.s2 = got["sum:s1"], got["sum:s2"]
+        self.s1, self.s2, self.s_tissue = got["sum:s1"], got["sum:s2"], got["sum:st"]
         self.od_min, self.od_max = got["min:od"], got["max:od"]
         if tissue:
             order = np.argsort(got["cat:index"], kind="stable")
@@ -796,8 +813,8 @@ class _LazyFit:
         lo, hi = block_quantiles(self.blocks, [fam])[0]
         return _extremes(plane, lo, hi, n, self.beta, what), n
 
-    def max_conc(self, stains: np.ndarray, percentile: float) -> np.ndarray:
-        """:func:`_max_conc`: each stain's percentile over the pixels that are not glass."""
+    def max_conc(self, stains: np.ndarray, percentile: float) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`_max_conc`: each stain's percentile and mean over the pixels not glass."""
         pinv = np.linalg.pinv(stains)
         every = self.n_tissue == 0  # no pixel off the glass: all of them (as in memory)
         n = int(np.prod(self.blocks.od.shape[:-1])) if every else self.n_tissue
@@ -815,7 +832,8 @@ class _LazyFit:
                 return c[:, i] if every else c[:, i][self._tissue(flat, u)]
 
             fams.append(Family(f"c{i}", conc, n, a - pad, b + pad, (percentile,)))
-        return np.array([row[0] for row in block_quantiles(self.blocks, fams)])
+        mean = np.asarray(self.s_tissue[1 if every else 0]) @ pinv / max(n, 1)
+        return np.array([row[0] for row in block_quantiles(self.blocks, fams)]), mean
 
 
 def _ends(x: np.ndarray, fn: Any) -> np.ndarray:
@@ -1031,13 +1049,13 @@ def macenko_stains(
     if is_dask(od):
         fit = _LazyFit(od, use, float(beta), rule, key)
         stains, n = fit.stains(float(alpha), max(min_pixels, 2), "Macenko")
-        maxc = fit.max_conc(stains, float(max_percentile))
+        maxc, meanc = fit.max_conc(stains, float(max_percentile))
     else:
         stains, n = _fit(od, float(beta), float(alpha), max(min_pixels, 2), rule, use=use)
-        maxc = _max_conc(od, stains, float(max_percentile), key, use)
+        maxc, meanc = _max_conc(od, stains, float(max_percentile), key, use)
     n_total = int(np.prod(rgb.shape[:-1]))
     i0t = (float(i0v[0]), float(i0v[1]), float(i0v[2]))
-    return MacenkoStains(stains, maxc, n, i0t, key, "macenko", n_total, i0_from)
+    return MacenkoStains(stains, maxc, n, i0t, key, "macenko", n_total, i0_from, meanc)
 
 
 def _target(target: object, **kw: Any) -> MacenkoStains:
@@ -1049,9 +1067,21 @@ def _target(target: object, **kw: Any) -> MacenkoStains:
     return macenko_stains(image_in(src, "target", nonempty=True), **kw)
 
 
-def _ln_units(st: MacenkoStains) -> np.ndarray:
-    """Max concentrations in ln-OD units (base-10 concentrations times ln 10)."""
-    m = np.asarray(st.max_concentrations, dtype=np.float64)
+#: The concentration references of :func:`macenko_normalize` (``reference``).
+_CONCENTRATION_REFERENCES = ("max", "mean")
+
+
+def _ln_units(st: MacenkoStains, reference: str = "max", name: str = "target") -> np.ndarray:
+    """Return the reference concentrations in ln-OD units (base-10 ones times ln 10)."""
+    if reference == "mean":
+        if st.mean_concentrations is None:
+            raise InvalidInputError(
+                f"expected {name} stains with mean_concentrations for reference='mean' (a JSON "
+                "file written before they were saved: measure the image again)"
+            )
+        m = np.asarray(st.mean_concentrations, dtype=np.float64)
+    else:
+        m = np.asarray(st.max_concentrations, dtype=np.float64)
     return m * _LN10 if _base(st.base) == "10" else m
 
 
@@ -1094,6 +1124,7 @@ def macenko_normalize(
     base: str = "e",
     method: Literal["macenko", "vahadane"] = "macenko",
     mask: Literal["auto", "he", "none"] | ArrayLike | None = "auto",
+    reference: Literal["max", "mean"] = "max",
 ) -> Array:
     r"""Re-render ``image`` with ``target``'s stain vectors and concentration range.
 
@@ -1102,7 +1133,22 @@ def macenko_normalize(
 
     with OD taken with the source's :math:`I_0` and the output lit by the target's
     :math:`I_{0,t}` (its background). Stains measured in another base (a JSON file from
-    before the ln convention) are converted: :math:`C_e = C_{10} \ln 10`.
+    before the ln convention) are converted: :math:`C_e = C_{10} \ln 10`. With
+    ``reference="mean"`` the ratio is of the mean concentrations over the same pixels,
+    :math:`\bar C_t / \bar C_s`, instead of the 99th percentiles.
+
+    The 99th percentile depends on the pixel size: a pixel of a slide's lower pyramid level
+    averages nuclei with the stroma around them, so the densest concentrations fall while
+    their mean stays (a mean is linear; the percentile of a blurred map is not). A
+    thumbnail normalised against a tile measured at full resolution comes out too dark:
+    laurapurcaro-bit/FolDet's study 5 thumbnail, hematoxylin 99th percentile 0.73 against
+    the dense target tile's 2.19 (its mean 0.31 against 0.37), CIEDE2000 from the target's
+    mean tissue colour 13.2 (``"max"``) against 0.9 (``"mean"``). Six tiles area-averaged
+    2, 4 and 8 times move the output's mean tissue colour by up to 16.2 (``"max"``) and
+    3.0 (``"mean"``) from the full-resolution output's
+    (benchmarks/results/stain-scale-2026-12-01e.md). ``"max"`` is the paper's (and
+    torchstain's); use ``"mean"`` when the image and the target are at different pixel
+    sizes or tissue densities.
 
     Parameters
     ----------
@@ -1122,6 +1168,10 @@ def macenko_normalize(
         The pixels of ``image`` the stains are estimated from, as in
         :func:`macenko_stains` (a target image gets ``"auto"`` when this is an array);
         every pixel is normalised.
+    reference : {"max", "mean"}
+        The concentrations matched: ``"max"`` the ``max_percentile``-th percentiles (Macenko
+        2009), ``"mean"`` the means (:attr:`MacenkoStains.mean_concentrations`; stains
+        loaded from a JSON file written before them raise :class:`InvalidInputError`).
 
     Returns
     -------
@@ -1156,6 +1206,7 @@ def macenko_normalize(
     }
     if source is not None and not isinstance(source, MacenkoStains):
         raise TypeError(f"expected source as MacenkoStains or None, got {type(source).__name__}")
+    ref = check_option(reference, _CONCENTRATION_REFERENCES, "concentration reference")
     tgt_mask = mask if mask is None or isinstance(mask, str) else "auto"
     # an estimate of the image's background is the image's: a target image gets its own
     tgt = _target(
@@ -1164,14 +1215,18 @@ def macenko_normalize(
     rgb = image_in(image, nonempty=True)
     src = macenko_stains(rgb, **kw, mask=mask) if source is None else source
     od = optical_density(rgb, min_intensity=min_intensity, i0=np.asarray(src.i0), base="e")
-    src_max, tgt_max = _ln_units(src), _ln_units(tgt)
+    src_max, tgt_max = _ln_units(src, ref, "source"), _ln_units(tgt, ref, "target")
+    what = (
+        "the means"
+        if ref == "mean"
+        else f"the max_percentile-th percentile, here {describe(max_percentile, 12)},"
+    )
     for name, mx in (("source", src_max), ("target", tgt_max)):
         if np.any(np.asarray(mx) <= 0):
             raise DegenerateConfigurationError(
-                f"Macenko: {name} max concentrations "
-                f"{np.round(np.asarray(mx), 4).tolist()} are not positive (they are the "
-                f"max_percentile-th percentile, here {describe(max_percentile, 12)}, of each "
-                "stain's concentrations)"
+                f"Macenko: {name} {ref} concentrations "
+                f"{np.round(np.asarray(mx), 4).tolist()} are not positive (they are "
+                f"{what} of each stain's concentrations)"
             )
     scale = tgt_max / src_max
     sv = np.linalg.svd(np.asarray(src.stain_matrix, dtype=np.float64), compute_uv=False)
@@ -1315,12 +1370,12 @@ def vahadane_stains(
     if h[0, 0] < h[1, 0]:
         h = h[::-1]
     if fit is not None:
-        maxc = fit.max_conc(h, float(max_percentile))
+        maxc, meanc = fit.max_conc(h, float(max_percentile))
     else:
-        maxc = _max_conc(od, h, float(max_percentile), key, use)
+        maxc, meanc = _max_conc(od, h, float(max_percentile), key, use)
     i0t = (float(i0v[0]), float(i0v[1]), float(i0v[2]))
     n_total = int(np.prod(rgb.shape[:-1]))
-    return MacenkoStains(h.copy(), maxc, n, i0t, key, "vahadane", n_total, i0_from)
+    return MacenkoStains(h.copy(), maxc, n, i0t, key, "vahadane", n_total, i0_from, meanc)
 
 
 #: Stain-vector estimators, each name mapped to its function (read-only): ``"macenko"``

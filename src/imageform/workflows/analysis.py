@@ -49,6 +49,8 @@ _CSV_COLUMNS = ("a_r", "a_g", "a_b", "b_r", "b_g", "b_b")
 # that they are the same. This module's public STAIN_METHODS is deprecated.
 _StainMethod = Literal["macenko", "reinhard"]
 _STAIN_METHODS = get_args(_StainMethod)
+#: macenko_normalize's concentration references (its ``reference``), spelled out likewise.
+_ScaleBy = Literal["max", "mean"]
 __getattr__ = _deprecate.module_getattr(
     "imageform.workflows.analysis",
     {
@@ -219,6 +221,13 @@ class StainNormalizeOptions(ImageIn, ImageOut, RgbFrom):
         "pixel; the default for reinhard) or a mask image (non-zero: use).",
         metavar="auto|he|none|FILE",
     )
+    scale_by: _ScaleBy = option(
+        "max",
+        help="macenko: the concentrations matched to the target's: max (the 99th percentile, "
+        "Macenko's) or mean (the same at any pixel size: a thumbnail against a tile "
+        "measured at full resolution).",
+        choices=get_args(_ScaleBy),
+    )
 
     def check(self) -> None:
         """Check the options and take ``target`` as a path."""
@@ -359,7 +368,12 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
         )
     source = _macenko(sample, mask, str(image), est) if opts.method == "macenko" else None
     if source is not None:
-        result = analysis.macenko_normalize(img, stats, source=source)
+        result = analysis.macenko_normalize(
+            img,
+            stats,
+            source=source,
+            reference=opts.scale_by,
+        )
     else:
         own = analysis.reinhard_stats(sample, mask)
         result = analysis.reinhard_normalize(img, stats, source_stats=own)
@@ -377,6 +391,7 @@ def stain_normalize(run: Run, opts: StainNormalizeOptions, *, out: Path, image: 
     if source is not None:
         summary["target_stain_matrix"] = np.asarray(stats.stain_matrix).tolist()
         summary["target_max_concentrations"] = np.asarray(stats.max_concentrations).tolist()
+        summary["scale_by"] = opts.scale_by
         summary["target_i0"], summary["target_i0_source"] = list(stats.i0), stats.i0_source
         summary["source_i0"], summary["source_i0_source"] = list(source.i0), source.i0_source
     else:
