@@ -138,6 +138,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "track-markers": "benchmarks/check_track_markers.py",
     "track-speed": "benchmarks/check_track_speed.py",
     "track-symmetric": "benchmarks/check_track_symmetric.py",
+    "track-upscaled": "benchmarks/check_track_upscaled.py",
     "remap": "benchmarks/bench_remap.py",
     "report": "benchmarks/bench_report.py",
     "sfr": "benchmarks/bench_sfr.py",

@@ -264,7 +264,7 @@ def test_block_means_u8_rounds_each_blocks_mean() -> None:
 def test_luma_u8_is_the_detectors_luma_rounded_and_its_numpy_twin() -> None:
     """A 4K RGB frame's grey (BoardTracker): 0.299 R + 0.587 G + 0.114 B rounded, both paths."""
     from imageform._kernels.aruco import luma_u8
-    from imageform.geometry.tracking import _luma_u8_numpy
+    from imageform.geometry.aruco import _luma_u8_numpy
 
     rng = np.random.default_rng(5)
     rgb = rng.integers(0, 256, (41, 67, 3), dtype=np.uint8)
@@ -423,3 +423,68 @@ def test_quad_pretest_never_refuses_a_quad_the_boundary_gives() -> None:
         refused += not possible
         kept += ok
     assert kept >= 20 and refused >= 35
+
+
+def _upscaled_sheet(blur: float = 1.2, scale: float = 3.6) -> tuple[np.ndarray, np.ndarray]:
+    """Eight 4x4 markers (ids 0-7) on a tilted sheet in a 640 x 360 frame (about 35 px each),
+    blurred, and the frame enlarged ``scale`` times (bicubic): (small, enlarged)."""
+    import cv2
+
+    from imageform.geometry import aruco_marker_image
+
+    px, q, w, h, S = 100, 20, 640, 360, 4
+    cell = px + 2 * q
+    sheet = np.full((2 * cell, 4 * cell), 255, np.uint8)
+    for k in range(8):
+        r, c = divmod(k, 4)
+        sheet[r * cell + q : r * cell + q + px, c * cell + q : c * cell + q + px] = (
+            aruco_marker_image(k, "4x4_50", size_px=px)
+        )
+    src = np.float32([[0, 0], [4 * cell, 0], [4 * cell, 2 * cell], [0, 2 * cell]])
+    x0, x1, y0, y1 = 0.35 * w, 0.65 * w, 0.35 * h, 0.65 * h
+    dst = np.float32([[x0, y0], [x1, y0 - 0.1 * h], [x1, y1 + 0.1 * h], [x0, y1]]) * S
+    H = cv2.getPerspectiveTransform(src, dst)
+    big = cv2.warpPerspective(sheet.astype(np.float32) * 0.8 + 20, H, (w * S, h * S))
+    small = cv2.GaussianBlur(cv2.resize(big, (w, h), interpolation=cv2.INTER_AREA), (0, 0), blur)
+    small += np.random.default_rng(0).normal(0, 2, small.shape)
+    g = np.clip(small.round(), 0, 255).astype(np.uint8)
+    return g, cv2.resize(g, None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC)
+
+
+def test_markers_read_small_are_read_enlarged() -> None:
+    """A frame enlarged 3.6 times (a 12 Mpx frame of a webcam's sharpness: corners rounded
+    by 3-6 px) gives the markers read at its own size, by both twins: the fitted corners'
+    tolerance is 12 % of the side (at least 3 px); at 3 % (3 px at 100 px) 2 of the 8 were
+    lost (OpenCV reads all 8)."""
+    small, big = _upscaled_sheet()
+    assert detect_aruco_markers(small, "4x4_50").ids.tolist() == list(range(8))
+    assert detect_aruco_markers(big, "4x4_50").ids.tolist() == list(range(8))
+    fast, slow = _both(big.astype(np.float64) / 255.0, "4x4_50")
+    _same(fast, slow)
+    assert sorted(fast) == list(range(8))
+
+
+def test_a_colour_image_is_read_on_its_grey_uint8(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``detect_aruco_markers`` of an RGB(A) uint8 image: the markers and corners of its grey
+    uint8 (luma rounded), by the integer threshold, as OpenCV reads a colour frame; no
+    float64 image of three planes is made (it was)."""
+    from imageform.geometry import aruco
+    from imageform.geometry.aruco import _luma_u8_numpy
+
+    _, big = _upscaled_sheet(scale=1.5)
+    rng = np.random.default_rng(2)
+    rgb = np.clip(big[..., None].astype(np.int16) + rng.integers(-9, 10, (1, 1, 3)), 0, 255)
+    rgb = rgb.astype(np.uint8)
+    grey = detect_aruco_markers(_luma_u8_numpy(rgb), "4x4_50")
+    assert grey.ids.tolist() == list(range(8))
+    real = aruco._gray01_checked
+
+    def grey_only(image: object) -> np.ndarray:
+        assert np.ndim(image) == 2, "a colour image took the float path"
+        return real(image)
+
+    monkeypatch.setattr(aruco, "_gray01_checked", grey_only)
+    for image in (rgb, np.dstack([rgb, np.full(rgb.shape[:2], 255, np.uint8)])):
+        got = detect_aruco_markers(image, "4x4_50")
+        assert got.ids.tolist() == grey.ids.tolist()
+        np.testing.assert_array_equal(got.corners, grey.corners)

@@ -388,3 +388,35 @@ def test_a_large_frame_goes_to_the_trackers_own_buffers() -> None:
     for f in frames:
         assert one.update(f).found
     assert {"grey", "grey32"} <= set(one._work.buffers)
+
+
+def test_colour_frames_are_tracked_as_their_grey_uint8(monkeypatch: pytest.MonkeyPatch) -> None:
+    """An RGB uint8 frame goes to its grey uint8 once (the detector's luma weights, rounded)
+    and is tracked as that grey frame is, bit for bit, by both marker trackers: no float64
+    three-plane image is made (it was, 300 MB a 12 Mpx frame)."""
+    from imageform.geometry import aruco
+
+    path = _path(3)
+    rng = np.random.default_rng(8)
+    rgbs = []
+    for f in _frames(path):
+        tint = rng.integers(-12, 13, size=(1, 1, 3))
+        rgbs.append(np.clip(f[..., None].astype(np.int16) + tint, 0, 255).astype(np.uint8))
+    greys = [aruco._luma_u8_numpy(c) for c in rgbs]
+    real = aruco._gray01_checked
+
+    def grey_only(image: object) -> np.ndarray:
+        assert np.ndim(image) == 2, "a colour frame took the float path"
+        return real(image)
+
+    monkeypatch.setattr(aruco, "_gray01_checked", grey_only)
+    for make in (
+        lambda: MarkerMapTracker(GRID, K),
+        lambda: MarkerTracker(int(GRID.ids[0]), 30.0, K, dictionary="4x4_50"),
+    ):
+        a, b = make(), make()
+        for c, g in zip(rgbs, greys, strict=True):
+            pa, pb = a.update(c), b.update(g)
+            assert pa.found and pb.found and pa.searched == pb.searched
+            np.testing.assert_array_equal(pa.image_points, pb.image_points)
+            np.testing.assert_array_equal(pa.tvec, pb.tvec)

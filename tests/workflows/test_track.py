@@ -614,7 +614,7 @@ def test_4k_rgb_frames_are_read_halved_as_their_grey(monkeypatch: pytest.MonkeyP
     """A 4K RGB frame (the video reader's, imageform track) is made grey uint8 with the
     detector's luma weights and its markers read on its half: the poses of the grey frames."""
     from imageform.geometry import charuco
-    from imageform.geometry.tracking import _luma_u8_numpy
+    from imageform.geometry.aruco import _luma_u8_numpy
 
     board, k4, _, frames = _frames_4k(2)
     rgbs = [np.repeat(g[..., None], 3, axis=2) for g in frames]

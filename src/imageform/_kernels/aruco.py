@@ -24,8 +24,8 @@ r"""numba kernels of the ArUco marker detector (``imageform.geometry.aruco``).
   image in integers (the same dark pixels, a quarter of the memory traffic);
   :func:`box_integral_roi`: the table of a region of the image, for the full-resolution
   look at a candidate found on the image reduced by :func:`block_means`; :func:`unit_grey`:
-  uint8 to [0, 1]; :func:`luma_u8`: an RGB uint8 frame to its grey uint8 (the detector's
-  Rec. 601 weights, rounded), for the markers' reading on a 4K video's halved frame.
+  uint8 to [0, 1]; :func:`luma_u8` and :func:`luma_u8_into`: an RGB uint8 frame to its grey
+  uint8 (the detector's Rec. 601 weights, rounded), the grey every colour frame is read on.
 - :func:`sample_quadrants`: the ChArUco corners' squares sampled through their local
   homographies (``imageform.geometry.charuco``'s seen-whole check).
 
@@ -63,6 +63,7 @@ __all__ = [
     "dark_components_u8",
     "decode_cells",
     "luma_u8",
+    "luma_u8_into",
     "sample_quadrants",
     "unit_grey",
 ]
@@ -248,14 +249,22 @@ def block_means_u8(g8: NDArray[np.uint8], f: int) -> NDArray[np.uint8]:  # pragm
 
 @njit(nogil=True, error_model="numpy")
 def luma_u8(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:  # pragma: no cover
-    """Return the grey uint8 of the RGB uint8 image ``rgb`` (H, W, 3).
+    """Return the grey uint8 of the RGB uint8 image ``rgb`` (H, W, 3): :func:`luma_u8_into`."""
+    out = np.empty((rgb.shape[0], rgb.shape[1]), dtype=np.uint8)
+    luma_u8_into(rgb, out)
+    return out
+
+
+@njit(nogil=True, error_model="numpy")
+def luma_u8_into(rgb: NDArray[np.uint8], out: NDArray[np.uint8]) -> None:  # pragma: no cover
+    """Write the grey uint8 of the RGB uint8 image ``rgb`` (H, W, 3) into ``out`` (H, W).
 
     :math:`Y = 0.299 R + 0.587 G + 0.114 B` (the detector's Rec. 601 weights,
     ``aruco._gray01``), rounded half up, in integers: ``(299 R + 587 G + 114 B + 500) // 1000``
-    (exact; :func:`imageform.geometry.tracking._luma_u8_numpy` is its NumPy twin).
+    (exact; :func:`imageform.geometry.aruco._luma_u8_numpy` is its NumPy twin). ``rgb`` is
+    C-contiguous.
     """
     hgt, wid = rgb.shape[0], rgb.shape[1]
-    out = np.empty((hgt, wid), dtype=np.uint8)
     flat = rgb.reshape(hgt, 3 * wid)
     for i in range(hgt):
         row = flat[i]
@@ -269,7 +278,6 @@ def luma_u8(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:  # pragma: no cover
             )
             # s // 1000 for s <= 255500, exactly, without a division (tested)
             o[j] = (s * 67109) >> 26
-    return out
 
 
 @njit(nogil=True, error_model="numpy")
@@ -567,14 +575,19 @@ def _quad(
 def _corner_tolerance(shortest_side: float) -> float:  # pragma: no cover - compiled
     """Largest move (px) of a quad's corner from its extreme boundary pixel to the fitted sides.
 
-    3 px, or 3 % of the shortest side when larger: a marker of a few hundred pixels (a
-    12-megapixel photograph of a printed board) has corners rounded by the lens and the
-    print and sides bent with the paper by several pixels. 3 % is the share of its perimeter
-    OpenCV's contour approximation allows a marker (``polygonalApproxAccuracyRate``), and
-    keeps the decoding's samples (the middle 40 % of each cell) in their cells up to
-    9 x 9 cells.
+    3 px, or 12 % of the shortest side when larger: the 3 % of the perimeter OpenCV's contour
+    approximation allows a marker (``polygonalApproxAccuracyRate``), 12 % of a square's
+    side. A corner's extreme pixel lies inside the sides' meeting point by a few times the
+    edge's blur (the threshold rounds the corner; more at an acute corner), and the blur in
+    pixels grows with the frame: a 720p webcam's markers of 30-40 px moved their corners up
+    to 2.2 px (6-8 % of the side), the same frames enlarged 3.6 times (markers of 100-150 px)
+    3-6.5 px, oblique ones of 50 px 4-5 px. A 12-megapixel photograph's corners rounded by
+    the lens and the print and sides bent with the paper move several pixels too. It was
+    3 % of the side: caliscope's webcam frames enlarged 3.6 times read 384 of the 528 markers
+    OpenCV read (555 now, 5 missed), 4096 x 3072 photographs 184 of 205 (209 now, 1 missed;
+    ``benchmarks/results/track-upscaled-2026-12-01e.md``).
     """
-    return max(3.0, 0.03 * shortest_side)
+    return max(3.0, 0.12 * shortest_side)
 
 
 @njit(nogil=True, error_model="numpy")
@@ -584,7 +597,7 @@ def _refine_sides(
     """Put the corners where the four fitted sides meet into ``out``.
 
     False when a side has too few pixels, two sides are parallel or a corner moves more
-    than ``_corner_tolerance`` of the shortest side (3 px, or 3 % of the side on large
+    than ``_corner_tolerance`` of the shortest side (3 px, or 12 % of the side on large
     markers).
 
     Each side is the total-least-squares line through the boundary pixels along it, moved

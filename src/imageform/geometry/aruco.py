@@ -316,6 +316,55 @@ def _gray01(image: object, *, scratch: bool = False) -> NDArray[np.float64]:
     return g
 
 
+def _luma_u8_numpy(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:
+    """:func:`imageform._kernels.aruco.luma_u8`'s NumPy twin: the same codes."""
+    r, g, b = (rgb[..., k].astype(np.int32) for k in range(3))
+    return np.asarray((r * 299 + g * 587 + b * 114 + 500) // 1000, dtype=np.uint8)
+
+
+def _grey_u8(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:
+    """Return an RGB(A) uint8 frame's grey uint8: the detector's luma weights, rounded.
+
+    Written into the buffer of the tracker whose frame this is (:func:`_working`; valid
+    for the frame) when it is larger than ``_MAX_KEPT`` pixels, a new array otherwise.
+    """
+    from imageform._backend import use_numba
+
+    c = np.ascontiguousarray(rgb[..., :3])
+    if not use_numba(c):
+        return _luma_u8_numpy(c)
+    from imageform._kernels.aruco import luma_u8_into
+
+    area = getattr(_WORK, "area", None)
+    size = c.shape[0] * c.shape[1]
+    if area is not None and size > _MAX_KEPT:
+        out = area.take("grey8", size, np.uint8).reshape(c.shape[:2])
+    else:
+        out = np.empty(c.shape[:2], dtype=np.uint8)
+    luma_u8_into(c, out)
+    return out
+
+
+def _grey_source(image: object) -> object:
+    """Return a uint8 RGB(A) image as its grey uint8 (:func:`_grey_u8`), once; else ``image``.
+
+    The detector then reads a colour frame as it reads a grey one: its threshold in integers
+    on the codes (``dark_components_u8``), the float grey in the reused buffers (a 12 Mpx
+    frame's three float64 planes, 300 MB, are never made). The grey is rounded to whole
+    codes (as OpenCV's ``cvtColor`` makes it): half a code at most from the float luma.
+    """
+    if (
+        isinstance(image, np.ndarray)
+        and image.dtype == np.uint8
+        and image.ndim == 3
+        and image.shape[2] in (3, 4)
+        and min(image.shape[:2]) >= 8
+        and image.shape[0] * image.shape[1] <= _MAX_PIXELS
+    ):
+        return _grey_u8(image)
+    return image
+
+
 def _gray01_checked(image: object) -> NDArray[np.float64]:
     arr = np.asarray(image) if not isinstance(image, np.ndarray) else image
     if arr.dtype.kind not in "uif" or arr.dtype.kind == "c":
@@ -467,7 +516,7 @@ def _refine_sides(
             return None
         out[k] = ((b1 * c2 - b2 * c1) / det, (c1 * a2 - c2 * a1) / det)
     shortest = float(np.min(np.hypot(*(np.roll(quad, -1, axis=0) - quad).T)))
-    if np.max(np.hypot(*(out - quad).T)) > max(3.0, 0.03 * shortest):
+    if np.max(np.hypot(*(out - quad).T)) > max(3.0, 0.12 * shortest):
         return None  # as imageform._kernels.aruco._corner_tolerance
     return out
 
@@ -663,9 +712,9 @@ def _detect(
     :func:`imageform._kernels.aruco.dark_components_u8`).
     """
     d = aruco_dictionary(dictionary)
-    g = _gray01(image, scratch=True)
     if source is None:
-        source = image
+        image = source = _grey_source(image)  # a colour frame read on its grey, once
+    g = _gray01(image, scratch=True)
     g8 = (
         source
         if isinstance(source, np.ndarray)

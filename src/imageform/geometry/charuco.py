@@ -48,6 +48,7 @@ from imageform.geometry.aruco import (
     _bilinear,
     _detect,
     _gray01,
+    _grey_source,
     aruco_dictionary,
     aruco_marker_image,
 )
@@ -326,6 +327,7 @@ def detect_charuco(
     """
     if not isinstance(board, CharucoBoard):
         raise InvalidInputError(f"expected board as a CharucoBoard, got {describe(board)}")
+    image = _grey_source(image)  # a colour frame read on its grey uint8, once
     g = _gray01(image, scratch=True)
     need = as_int(min_markers, "min_markers", minimum=1, maximum=16)
     shift = as_real(max_shift, "max_shift", positive=True, maximum=1.0)

@@ -596,9 +596,12 @@ class MarkerTracker:
             return self._update(image)
 
     def _update(self, image: ArrayLike) -> BoardPose:
+        from imageform.geometry.aruco import _grey_source
+
         a = np.asarray(image)
         if a.ndim not in (2, 3) or a.shape[0] < 8 or a.shape[1] < 8:
             raise InvalidInputError(f"expected a frame as an (H, W[, 3]) image, got {describe(a)}")
+        a = np.asarray(_grey_source(a))  # a colour frame read on its grey uint8, once
         h, w = a.shape[:2]
         uv, searched = None, "none"
         if self.predict and self._box is not None:

@@ -139,24 +139,6 @@ def _marker_side(corners: NDArray[np.float64]) -> float:
     return float(np.hypot(e[..., 0], e[..., 1]).min())
 
 
-def _luma_u8_numpy(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:
-    """:func:`imageform._kernels.aruco.luma_u8`'s NumPy twin: the same codes."""
-    r, g, b = (rgb[..., k].astype(np.int32) for k in range(3))
-    return np.asarray((r * 299 + g * 587 + b * 114 + 500) // 1000, dtype=np.uint8)
-
-
-def _grey_u8(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:
-    """Return an RGB(A) uint8 frame's grey uint8: the detector's luma weights, rounded."""
-    from imageform._backend import use_numba
-
-    c = np.ascontiguousarray(rgb[..., :3])
-    if use_numba(c):
-        from imageform._kernels.aruco import luma_u8
-
-        return np.asarray(luma_u8(c))
-    return _luma_u8_numpy(c)
-
-
 def _missing(searched: str = "none", uv: NDArray[np.float64] | None = None) -> BoardPose:
     nan3 = np.full(3, np.nan)
     empty = np.zeros((0, 2)) if uv is None else uv
@@ -510,6 +492,7 @@ class BoardTracker:
             return self._update(image)
 
     def _update(self, image: ArrayLike) -> BoardPose:
+        from imageform.geometry.aruco import _grey_source
         from imageform.geometry.pnp import solve_pnp
         from imageform.geometry.rotations import matrix_to_rvec
 
@@ -518,17 +501,11 @@ class BoardTracker:
             raise InvalidInputError(f"expected a frame as an (H, W[, 3]) image, got {describe(a)}")
         h, w = a.shape[:2]
         self._frame = (h, w)
-        if (
-            self._charuco is not None
-            and max(h, w) >= _REDUCE_FROM
-            and a.dtype == np.uint8
-            and a.ndim == 3
-            and a.shape[2] in (3, 4)
-        ):
-            # a 4K RGB frame (imageform track's video reader) to its grey, rounded to uint8,
-            # for the markers' reading on its half (_reduction): the float grey of the frame
-            # alone costs more than the halved reading
-            a = _grey_u8(a)
+        if self._charuco is not None:
+            # an RGB uint8 frame (imageform track's video reader) to its grey, rounded to
+            # uint8, once: the markers and corners read on it as on a grey frame (the integer
+            # threshold, the buffers; on a 4K frame the markers' reading on its half)
+            a = np.asarray(_grey_source(a))
         self._quiet = self._quiet + 1 if self._vain >= _SMEAR_PATIENCE else 0
         self._frame_vain = False
         self._spare = None
