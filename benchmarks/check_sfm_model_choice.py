@@ -43,7 +43,7 @@ SEQUENCES: dict[str, tuple[float, str, bool, list[tuple[int, int, int]]]] = {
     "c3vd": (199.2, "working camera (pycolmap, 37 frames)", True,
              [(8, 0, 1), (8, 5, 1), (13, 0, 1)]),
     "colon-a": (123.07, "pycolmap RADIAL_FISHEYE, 50 frames", True,
-                [(8, 0, 2), (13, 0, 2), (20, 0, 2), (20, 10, 2)]),
+                [(8, 0, 2), (13, 0, 2), (20, 0, 2)]),
     "colon-b": (128.30, "pycolmap RADIAL_FISHEYE, 50 frames", True,
                 [(8, 0, 2), (13, 0, 2), (20, 0, 2)]),
     "temple": (1520.4, "Middlebury calibration", False, [(8, 0, 2), (13, 0, 1)]),
@@ -53,7 +53,8 @@ SEQUENCES: dict[str, tuple[float, str, bool, list[tuple[int, int, int]]]] = {
 #: Held out (``--held-out DIR``, chosen and frozen by SHA-256 before any run, run once with
 #: the final code): Gongsta/vSLAM-py at ``6a24802`` (MIT; the frames are KITTI's, CC BY-NC-SA
 #: 3.0: measured here, never committed), ``KITTI_sequence_1/image_l`` (51 frames of 1241 x
-#: 376, a car driving down a road), its ``calib.txt`` f 707.09 px
+#: 376, a car driving down a road), its ``calib.txt`` f 707.09 px; seed 0 alone (``--seeds 0``:
+#: a run of these frames took minutes on the shared machine)
 HELD_OUT: dict[str, tuple[float, str, bool, list[tuple[int, int, int]]]] = {
     "kitti1": (707.0912, "KITTI calibration (calib.txt)", False,
                [(8, 0, 2), (13, 0, 2), (20, 0, 2), (20, 10, 2)]),
@@ -147,6 +148,33 @@ def report(after: list[dict[str, Any]], before: list[dict[str, Any]] | None) -> 
     return "\n".join(out)
 
 
+def summary(after: list[dict[str, Any]], before: list[dict[str, Any]] | None) -> str:
+    """Per sequence: the runs, the median |f error|, the runs off by over 10 % and how many
+    of those were said not fixed (before: no run was)."""
+    out = [
+        "| sequence | runs | median abs f error before -> after | over 10 % off before -> "
+        "after | of those said not fixed (after) | said fixed and over 10 % off (after) | "
+        "fixed and within 10 % (after) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    seqs = list(dict.fromkeys(r["seq"] for r in after))
+    for name in [*seqs, "all"]:
+        a = [r for r in after if (name == "all" or r["seq"] == name) and "err" in r]
+        b = [r for r in before or [] if (name == "all" or r["seq"] == name) and "err" in r]
+        off = [r for r in a if abs(r["err"]) > 10]
+        said = sum(1 for r in off if r.get("determined") is False)
+        wrong = sum(1 for r in off if r.get("determined") is True)
+        good = sum(1 for r in a if abs(r["err"]) <= 10 and r.get("determined") is True)
+        med_b = f"{np.median([abs(r['err']) for r in b]):.1f}" if b else "-"
+        med_a = f"{np.median([abs(r['err']) for r in a]):.1f}" if a else "-"
+        off_b = sum(1 for r in b if abs(r["err"]) > 10) if b else "-"
+        out.append(
+            f"| {name} | {len(a)} | {med_b} -> {med_a} % | {off_b} -> {len(off)} | {said} | "
+            f"{wrong} | {good} |"
+        )
+    return "\n".join(out)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path)
@@ -162,6 +190,7 @@ def main() -> None:
         before = None if a.before is None else json.loads(a.before.read_text())
         print(f"{time.strftime('%Y-%m-%d')} · {platform.machine()} · Python "
               f"{platform.python_version()}\n")  # fmt: skip
+        print(summary(after, before) + "\n")
         print(report(after, before))
         return
     if a.data is None:

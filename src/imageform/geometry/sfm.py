@@ -379,8 +379,8 @@ class Reconstruction:
         :math:`a` the curvature in :math:`\ln f`, :math:`\hat\sigma^2` the residual
         variance), widened by what a reconstruction started again from the camera found
         moved it and, where two lens models both fix f, by half their difference. Over
-        10 % of f: a note says the frames do not fix it. None when f is held or fewer than
-        3 frames are registered.
+        10 % of f: a note says the frames do not fix it (inf with fewer than 3 frames
+        registered). None when f is held.
     """
 
     R: F64
@@ -2486,12 +2486,13 @@ def _reconstruct(
         (:math:`M` views, :math:`n` frames, :math:`m` points, :math:`p` intrinsics). The
         other parameters follow f along its valley, so a lens term or depths that trade
         against it (few frames, forward motion) make it wide. Inf where the cost does not
-        rise (f not fixed at all); None with fewer than 3 frames.
+        rise (f not fixed at all), and with fewer than 3 frames (two views leave f free
+        along the baseline: it trades against the depths).
         """
         ids = np.flatnonzero(o_ok & registered[o_frame] & has_point()[o_track])
         nreg = int(registered.sum())
         if ids.size == 0 or nreg < 3:
-            return None
+            return float("inf")
         fixed = ~registered
         fixed[i0] = True
         R0 = np.where(registered[:, None, None], Rs, np.eye(3))
