@@ -52,8 +52,8 @@ SEQUENCES: dict[str, tuple[float, str, bool, list[tuple[int, int, int]]]] = {
 
 #: Held out (``--held-out DIR``, chosen and frozen by SHA-256 before any run, run once with
 #: the final code): Gongsta/vSLAM-py at ``6a24802`` (MIT; the frames are KITTI's, CC BY-NC-SA
-#: 3.0: measured here, never committed), ``KITTI_sequence_1/image_l`` (51 frames of 1241 x
-#: 376, a car driving down a road), its ``calib.txt`` f 707.09 px; seed 0 alone (``--seeds 0``:
+#: 3.0: measured here, never committed), ``KITTI_sequence_1/image_l`` (51 frames of 1226 x
+#: 370, a car driving down a road), its ``calib.txt`` f 707.09 px; seed 0 alone (``--seeds 0``:
 #: a run of these frames took minutes on the shared machine)
 HELD_OUT: dict[str, tuple[float, str, bool, list[tuple[int, int, int]]]] = {
     "kitti1": (707.0912, "KITTI calibration (calib.txt)", False,
