@@ -121,6 +121,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "sfm-k1": "benchmarks/check_sfm_k1.py",
     "sfm-fisheye": "benchmarks/check_sfm_fisheye.py",
     "sfm-choice": "benchmarks/check_sfm_choice.py",
+    "sfm-model-choice": "benchmarks/check_sfm_model_choice.py",
     "sfm-inliers": "benchmarks/check_sfm_inliers.py",
     "sfm-intruders": "benchmarks/check_sfm_intruders.py",
     "sfm-dense": "benchmarks/check_sfm_dense.py",

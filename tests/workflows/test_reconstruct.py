@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import csv
 import json
-import re
 from pathlib import Path
 
 import numpy as np
@@ -570,30 +569,28 @@ def test_room_photographs_with_exif_focal_length(
     assert sfm_scenes.align_rms(np.array(C_est), C_true) < 0.01
 
 
-def test_a_fisheye_without_a_camera_file_does_not_settle(
+def test_a_fisheye_without_a_camera_file_is_the_lens_that_fixes_f(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """The C3VD colonoscope (a Kannala-Brandt fisheye, f 199 px; tests/data/endo) without a
     camera file: f and one radial term wander along their valley and do not settle (537.6
-    -> 466.1 -> 287.9 -> 421.9 px, k1 -0.43), and the notes say to calibrate. Before the
-    rim's observations were judged in the image (sfm-inliers-2026-11-30k.md) they ran off
-    (2487 px, k1 -17.8) and f was refined alone (362.1 px); the frames fix neither (the
-    clip's pixels are not square: docs/camera-file.md). The equidistant fisheye is tried
-    (f 202.0 px) and not kept: on the tracks of both models its robust cost is the higher
-    (1976 against 1764 px^2 when measured; 1913 against 1494 in sfm-choice-2026-11-30j.md),
-    so the camera file is SIMPLE_RADIAL."""
+    -> 466.1 -> 287.9 -> 421.9 px, k1 -0.43): SIMPLE_RADIAL's f is 421.9 +- 103.3 px (24 %),
+    not fixed. The equidistant fisheye tried fixes it, 202.0 +- 6.4 px (3 %), and is kept
+    though its tracks' robust cost is the higher (1976 against 1764 px^2): a lens whose f the
+    frames fix beats one whose f they do not (sfm-model-choice-2026-12-01e.md). Until then
+    the camera file was SIMPLE_RADIAL's 421.9 px."""
     endo = Path(__file__).resolve().parents[1] / "data" / "endo"
     out = tmp_path / "rec"
     args = [str(endo / "*.jpg"), "-o", str(out), "--auto-mask", "--contrast-threshold", "0.01"]
     assert main(["reconstruct", *args]) == 0
     err = capsys.readouterr().err
-    assert "the camera did not settle" in err and "calibrate the camera" in err, err
-    assert "the fisheye tried (" in err, err
+    assert "the fisheye tried (SIMPLE_RADIAL's f = " in err and "not fixed" in err, err
     intr = json.loads((out / "metrics.json").read_text())["intrinsics"]
-    assert intr["model"] == "SIMPLE_RADIAL" and intr["fisheye"].endswith("not kept"), intr
-    costs = [float(c) for c in re.findall(r"(\d+) px\^2", intr["fisheye"])]
-    assert len(costs) == 2 and costs[0] > costs[1], intr
-    assert intr["focal_px"] < 537.6, intr
+    assert intr["model"] == "KANNALA_BRANDT", intr
+    assert intr["fisheye"].endswith("kept (the fisheye, its f fixed by the frames)"), intr
+    assert intr["focal_px"] == pytest.approx(199.2, rel=0.05), intr
+    assert intr["focal_fixed"] is True and intr["focal_px_sd"] < 0.1 * intr["focal_px"], intr
+    assert "+- " in err and "the focal length is not fixed" not in err, err
     # with the working camera the reconstruction settles: no such note
     again = [*args[:2], str(tmp_path / "rec2"), *args[3:], "--camera", str(endo / "camera.toml")]
     assert main(["reconstruct", *again]) == 0

@@ -336,7 +336,7 @@ def match_features(
 
 @dataclass(frozen=True)
 class Reconstruction:
-    """The result of :func:`reconstruct_sequence`.
+    r"""The result of :func:`reconstruct_sequence`.
 
     Attributes
     ----------
@@ -371,6 +371,16 @@ class Reconstruction:
         ``SIMPLE_RADIAL``, or ``KannalaBrandt(k1)``, the equidistant fisheye with one term,
         where that was tried and kept). With ``K``, the camera to reproject the points into
         the frames.
+    focal_sd_px : float or None
+        With ``refine_focal``: how well the frames fix the focal length found, its standard
+        deviation (pixels; inf where the cost does not rise away from it): the profile of
+        the final bundle adjustment's cost in f (f held 10 % either side, every pose, point
+        and kept lens term adjusted again; :math:`\sigma_f = f \sqrt{\hat\sigma^2 / a}`,
+        :math:`a` the curvature in :math:`\ln f`, :math:`\hat\sigma^2` the residual
+        variance), widened by what a reconstruction started again from the camera found
+        moved it and, where two lens models both fix f, by half their difference. Over
+        10 % of f: a note says the frames do not fix it (inf with fewer than 3 frames
+        registered). None when f is held.
     """
 
     R: F64
@@ -385,7 +395,12 @@ class Reconstruction:
     K: F64 | None = None
     focal_fit_px: float | None = None
     distortion: DistortionModel | None = None
+    focal_sd_px: float | None = None
 
+
+#: The focal length's profile (:func:`_reconstruct`'s ``focal_spread``) holds it this share
+#: either side of the one found
+_FOCAL_PROFILE = 0.1
 
 #: A given focal length is flagged when a bundle adjustment that refines it moves it by more
 #: than this share (:func:`reconstruct_sequence`'s note). The check moves only part of the
@@ -1419,7 +1434,10 @@ def reconstruct_sequence(
         Else ``K`` is held, and checked: one more bundle adjustment that
         refines the focal length from the final poses and points, a note when it moves
         by more than 10 % (the result's ``focal_fit_px``). The result's ``K`` is the one
-        found.
+        found, its standard deviation the result's ``focal_sd_px``; where that is over
+        10 % of f, a note says the frames do not fix it (a camera that moves without
+        turning: scaling f and the sideways parts of the points and translations together
+        changes no image), and the f found is no measurement.
     refine_distortion : bool
         Refine one radial distortion term shared by every frame, COLMAP's
         ``SIMPLE_RADIAL`` lens (its default for a camera it does not know, with
@@ -1454,9 +1472,15 @@ def reconstruct_sequence(
         the tracks of both models cost it no more: each track triangulated with each
         model's cameras held, every view's squared reprojection error in the image capped
         at 2 px (a view it cannot explain at the cap), plus GRIC's :math:`\ln(2n)` per
-        lens parameter (Torr 1998; Torr & Zisserman 2000); a note says what was tried,
-        the two costs and what was chosen. ``distortion`` given as ``KannalaBrandt`` with
-        k1 alone: that lens's term is the one refined.
+        lens parameter (Torr 1998; Torr & Zisserman 2000); but where the frames fix one
+        lens's f and not the other's (``focal_sd_px`` over 10 % of f), the one that fixes
+        it is returned when it registers as many frames: on 8 to 13 frames the two costs
+        swing with the keypoints and the seed (C3VD: ``SIMPLE_RADIAL``'s f from 292 to 913
+        px, the fisheye's 187 to 221; ``benchmarks/results/sfm-model-choice-2026-12-01e.md``).
+        A note says what was tried, the two costs, each f and its standard deviation and
+        what was chosen. The fisheye is also tried where ``SIMPLE_RADIAL``'s f is not fixed.
+        ``distortion`` given as ``KannalaBrandt`` with k1 alone: that lens's term is the
+        one refined.
     equalize : bool
         Each frame's grey levels equalized by CLAHE before SIFT (:func:`detect_features`):
         for an endoscope, whose light falls off from the centre: more points on the C3VD
@@ -1502,22 +1526,40 @@ def reconstruct_sequence(
         return _one_model(images, K, distortion, kw)
     best = _self_calibrated(images, K, distortion, kw)
     if not refine_distortion:
-        return best
+        return _focal_said(best, K)
     f_given = float(np.asarray(K, np.float64)[0, 0])
     feats = cache.get("feats")
     why = _ran_off(best, f_given, feats)
     checked = _radial_checked(images, K, distortion, kw, best)
     if distortion is not None or not refine_focal:
-        return checked
+        return _focal_said(checked, K)
     if why is None:  # a strong barrel term, at half its bound or more: a fisheye's sign
         k1 = _radial_start(best.distortion)
         share = 0.0 if feats is None else _radial_share(best, feats)
-        if not (k1 < 0 and share >= _FISHEYE_HINT) or checked is not best:
-            return checked
-        why = f"k1 = {k1:.3f}, {100 * share:.0f} % of its bound on the keypoints"
+        if checked.focal_sd_px is not None and not _focal_fixed(checked):
+            # another lens may fix f where this one does not
+            why = f"SIMPLE_RADIAL's {_sd_said(checked)}: not fixed by the frames"
+        elif not (k1 < 0 and share >= _FISHEYE_HINT) or checked is not best:
+            return _focal_said(checked, K)
+        else:
+            why = f"k1 = {k1:.3f}, {100 * share:.0f} % of its bound on the keypoints"
     else:
         why = f"SIMPLE_RADIAL ran off: {why}"
-    return _fisheye_tried(images, K, kw, checked, why)
+    return _focal_said(_fisheye_tried(images, K, kw, checked, why), K)
+
+
+def _focal_said(rec: Reconstruction, K: ArrayLike) -> Reconstruction:
+    """``rec`` with a note where the frames do not fix its focal length (``_FOCAL_FIXED``)."""
+    if rec.K is None or rec.focal_sd_px is None or _focal_fixed(rec):
+        return rec
+    f0 = float(np.asarray(K, np.float64)[0, 0])
+    note = (
+        f"the focal length is not fixed by the frames: {_sd_said(rec)} (more than "
+        f"{100 * _FOCAL_FIXED:.0f} %; started from {f0:.1f} px): the scale of the points "
+        "across the view is not known; calibrate the camera and give it, or more frames "
+        "that turn"
+    )
+    return replace(rec, notes=[*rec.notes, note])
 
 
 def _self_calibrated(
@@ -1556,6 +1598,7 @@ def _self_calibrated(
         far = abs(found / start - 1) >= _FOCAL_RESTART or lens_moved >= _RADIAL_RESTART
         return start, found, k1_start, k1_found, far
 
+    restarted: float | None = None  # the last restart's f: started from, found
     for _ in range(2):
         start, found, k1_start, k1_found, far = moved(best)
         if not far:
@@ -1569,6 +1612,7 @@ def _self_calibrated(
         except DegenerateConfigurationError:
             break
         f_again = float(again.K[0, 0]) if again.K is not None else found
+        restarted = found - f_again  # two reconstructions, from two cameras
         if refine_distortion:
             k1_again = _radial_start(again.distortion)
             note = (
@@ -1601,7 +1645,27 @@ def _self_calibrated(
                     "calibrate the camera and give it",
                 ],
             )
-    return best
+    return _with_spread(best, restarted)
+
+
+def _with_spread(rec: Reconstruction, d: float | None, half: bool = False) -> Reconstruction:
+    r"""Return ``rec`` with ``focal_sd_px`` widened by the difference ``d`` of two f found.
+
+    The profile's :math:`\sigma_p` (``_reconstruct``'s ``focal_spread``) holds the tracks,
+    the registration and the lens model fixed. A reconstruction started from another
+    camera registers and triangulates anew, and where the frames do not fix f it lands
+    elsewhere (C3VD's 13 frames: 466, 288, 422 px, the profile's 41 px): the last restart's
+    two focal lengths (the one it started from, found by the reconstruction before, and
+    the one it found, kept or not) are two draws, their sample variance :math:`d^2 / 2`
+    added: :math:`\sigma_f = \sqrt{\sigma_p^2 + d^2 / 2}`. ``half``: ``d`` is the
+    difference between the f of two lens models, weighed alike (a model average's
+    between-model variance, :math:`(d / 2)^2`; Hoeting et al. 1999, "Bayesian model
+    averaging", Statist. Sci. 14(4), eq. 2).
+    """
+    if rec.K is None or rec.focal_sd_px is None or d is None:
+        return rec
+    var = d * d / (4.0 if half else 2.0)
+    return replace(rec, focal_sd_px=float(np.sqrt(rec.focal_sd_px**2 + var)))
 
 
 #: ``refine_distortion``: the camera ran off when the radial term reached this share of its
@@ -1889,14 +1953,44 @@ def _fisheye_tried(
         f"frames, {e_chk:.2f} px, {c_chk:.0f} px^2 ({n_views} views, each error capped at "
         f"{_TRACK_CAP_PX:g} px)"
     )
+    said += f"; f fixed to {_sd_said(fish)} and {_sd_said(checked)}"
     off = _ran_off(fish, f_start, feats)
     if off is not None:
         return replace(checked, notes=[*checked.notes, f"{said}: it ran off ({off}): not kept"])
-    if n_fish >= n_chk and c_fish <= c_chk:  # NaN (no tracks to compare): not kept
+    # a model whose f the frames fix beats one whose f they do not, unless it registers
+    # fewer frames; else the cost (NaN, no tracks to compare: not kept)
+    fixed_fish, fixed_chk = _focal_fixed(fish), _focal_fixed(checked)
+    fixes = (fixed_fish and not fixed_chk) or (fixed_chk and not fixed_fish and n_chk >= n_fish)
+    by_cost = not fixes and c_fish <= c_chk
+    # where both lenses fix f, what the choice between them leaves open: their two f,
+    # weighed alike (a lens that does not fix f says nothing of it)
+    d = float(fish.K[0, 0]) - float(checked.K[0, 0]) if fixed_fish and fixed_chk else None
+    if n_fish >= n_chk and ((fixed_fish and not fixed_chk) or by_cost):
         # the pinhole's run-off stays said (metrics.json's intrinsics.fallback)
         ran = [m for m in checked.notes if m.startswith("the camera ran off")]
-        return replace(fish, notes=[*fish.notes, *ran, f"{said}: kept (the fisheye)"])
-    return replace(checked, notes=[*checked.notes, f"{said}: not kept"])
+        how = "" if by_cost else ", its f fixed by the frames"
+        kept = replace(fish, notes=[*fish.notes, *ran, f"{said}: kept (the fisheye{how})"])
+        return _with_spread(kept, d, half=True)
+    return _with_spread(replace(checked, notes=[*checked.notes, f"{said}: not kept"]), d, True)
+
+
+#: A focal length is fixed by the frames when its standard deviation
+#: (``Reconstruction.focal_sd_px``) is at most this share of it
+_FOCAL_FIXED = 0.1
+
+
+def _focal_fixed(rec: Reconstruction) -> bool:
+    """Whether the frames fix ``rec``'s focal length (``focal_sd_px``, ``_FOCAL_FIXED``)."""
+    if rec.K is None or rec.focal_sd_px is None:
+        return False
+    return bool(rec.focal_sd_px <= _FOCAL_FIXED * float(rec.K[0, 0]))
+
+
+def _sd_said(rec: Reconstruction) -> str:
+    """``rec``'s focal length and its standard deviation, in words."""
+    assert rec.K is not None
+    f, sd = float(rec.K[0, 0]), rec.focal_sd_px
+    return f"f = {f:.1f} px" + ("" if sd is None else f" +- {sd:.1f} px ({100 * sd / f:.0f} %)")
 
 
 #: With ``refine_focal``: a focal length that moves by more than this share starts the
@@ -2373,6 +2467,70 @@ def _reconstruct(
             focal=True,
         )
         return float(Kc[0, 0])
+
+    def focal_spread() -> float | None:
+        r"""Return the standard deviation of the focal length the final adjustment found.
+
+        The profile of its cost (Venzon & Moolgavkar 1988, "A method for computing
+        profile-likelihood-based confidence intervals", Appl. Statist. 37(1); Triggs et
+        al. 2000, sec. 10):
+        f held at :math:`f e^{\pm h}` (:math:`h = \ln(1 + \delta)`, ``_FOCAL_PROFILE``),
+        every pose and point (and the lens's term where it was kept) adjusted again, the
+        sums of squared image errors :math:`S_-, S_0, S_+` give the parabola
+        :math:`S(u) \approx S_0 + a u^2` in :math:`u = \ln f`,
+        :math:`a = (S_+ + S_- - 2 S_0) / (2 h^2)`, and
+
+        .. math:: \sigma_f = f \sqrt{\hat\sigma^2 / a}, \quad
+                  \hat\sigma^2 = S_0 / (2 M - 6 n - 3 m - p)
+
+        (:math:`M` views, :math:`n` frames, :math:`m` points, :math:`p` intrinsics). The
+        other parameters follow f along its valley, so a lens term or depths that trade
+        against it (few frames, forward motion) make it wide. Inf where the cost does not
+        rise (f not fixed at all), and with fewer than 3 frames (two views leave f free
+        along the baseline: it trades against the depths).
+        """
+        ids = np.flatnonzero(o_ok & registered[o_frame] & has_point()[o_track])
+        nreg = int(registered.sum())
+        if ids.size == 0 or nreg < 3:
+            return float("inf")
+        fixed = ~registered
+        fixed[i0] = True
+        R0 = np.where(registered[:, None, None], Rs, np.eye(3))
+        t0 = np.where(registered[:, None], ts, 0.0)
+        pts, pslot = np.unique(o_track[ids], return_inverse=True)
+        fr = o_frame[ids]
+        radial = radial_k1 is not None
+        uv = raw[offset[fr] + o_kp[ids]] if radial else o_uv[ids]
+        lens_free = radial and radial_given is not None and radial_k1 != radial_given
+        k1_0 = 0.0 if radial_k1 is None else radial_k1
+
+        def sse(K_: F64, k1: float, R_: F64, t_: F64, X_: F64) -> float:
+            proj, _ = _project_obs(K_, R_[fr], t_[fr], X_[pslot])
+            if radial:
+                d = (_equidistant if fisheye else _radial)(K_, k1, proj)[0] - uv
+            else:
+                d = proj - uv
+                if distortion is not None:
+                    d = np.einsum("mij,mj->mi", o_A[ids], d)
+            return float(np.nansum(d * d))
+
+        s0 = sse(k, k1_0, R0, t0, P[pts])
+        side = []
+        h = float(np.log1p(_FOCAL_PROFILE))
+        for u in (-h, h):
+            Kq = k.copy()
+            Kq[:2, :2] *= np.exp(u)
+            Rn, tn, Xn, _, k1n = _schur_lm(
+                Kq, R0, t0, P[pts], fr, pslot, uv, fixed, 0.0, 30,
+                A=None if distortion is None or radial else o_A[ids],
+                radial=radial_k1, refine_radial=lens_free, fisheye=fisheye,
+            )  # fmt: skip
+            side.append(sse(Kq, k1n if lens_free else k1_0, Rn, tn, Xn))
+        a = (side[0] + side[1] - 2.0 * s0) / (2.0 * h * h)
+        dof = 2 * ids.size - 6 * (nreg - 1) - 3 * pts.size - 1 - int(lens_free)
+        if not a > 0 or dof <= 0:
+            return float("inf")
+        return float(k[0, 0] * np.sqrt(s0 / dof / a))
 
     def filter_obs(limit: float, min_angle: float = 0.0) -> None:
         """Drop observations beyond ``limit`` pixels; points left with one view go."""
@@ -2899,6 +3057,7 @@ def _reconstruct(
     if radial_k1 is not None and radial_given is not None:
         choose_lens(radial_given)
     focal_fit = None if refine_focal else check_focal()
+    focal_sd = focal_spread() if refine_focal else None
     # the output in the first registered frame's camera frame (frame 0 when registered):
     # X' = R_f X + t_f, R_i' = R_i R_f^T, t_i' = t_i - R_i' t_f (a rigid motion: the
     # reprojections and the initial pair's baseline stay)
@@ -2955,5 +3114,6 @@ def _reconstruct(
             "a zoom) or refine it (refine_focal; imageform reconstruct --refine-focal)"
         )
     return Reconstruction(
-        Rs, ts, registered, Pout, colors, length, rms, notes, residuals, k, focal_fit, distortion
-    )
+        Rs, ts, registered, Pout, colors, length, rms, notes, residuals, k, focal_fit, distortion,
+        focal_sd,
+    )  # fmt: skip

@@ -303,8 +303,15 @@ def _guess_camera(
 def _camera_note(intr: dict[str, Any], first: Path | None) -> str:
     """Say where K comes from (no camera file), and what the refinement found."""
     f0 = intr["focal_px_initial"]
+    sd, fixed = intr.get("focal_px_sd"), intr.get("focal_fixed")
+    spread = (
+        ""
+        if fixed is None
+        else (f" +- {sd:.1f} px" if sd is not None else " +- inf")
+        + ("" if fixed else ", not fixed by the frames")
+    )
     refined = (
-        f"; refined by bundle adjustment to f = {intr['focal_px']:.1f} px "
+        f"; refined by bundle adjustment to f = {intr['focal_px']:.1f} px{spread} "
         f"({100 * (intr['focal_px'] / f0 - 1):+.1f} %)"
         if intr["refined"]
         else ""
@@ -466,6 +473,11 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     intrinsics["focal_px"] = float(np.asarray(K if rec.K is None else rec.K)[0, 0])
     # held: the focal length a bundle adjustment refining it finds (the given K's check)
     intrinsics["focal_px_fit"] = rec.focal_fit_px
+    # refined: how well the frames fix it (its standard deviation; None: not refined, or
+    # too few frames), and whether that is within 10 % (reconstruct_sequence's note)
+    sd = rec.focal_sd_px
+    intrinsics["focal_px_sd"] = None if sd is None or not np.isfinite(sd) else float(sd)
+    intrinsics["focal_fixed"] = None if sd is None else bool(sd <= 0.1 * intrinsics["focal_px"])
     # the camera found (the frame's, not its field's: the refinement scales fx and fy alike)
     K_out = np.array(K_frame, np.float64)
     K_out[:2, :2] *= intrinsics["focal_px"] / float(np.asarray(K)[0, 0])
