@@ -63,6 +63,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "chart-real": "benchmarks/check_chart_real.py",
     "chart-third": "benchmarks/check_chart_real.py",
     "board-fresh": "benchmarks/check_board_fresh.py",
+    "calib-fresh": "benchmarks/check_calib_fresh.py",
     "board-third": "benchmarks/check_board_third.py",
     "charuco": "benchmarks/bench_charuco.py",
     "charuco-real": "benchmarks/check_charuco_real.py",

@@ -50,6 +50,7 @@ from imageform.geometry.calibration_refine import (
 from imageform.geometry.calibration_result import CalibrationResult
 from imageform.geometry.calibration_views import _views
 from imageform.geometry.calibration_zhang import (
+    centre_intrinsics,
     dlt_init,
     homographies,
     poses_from_homographies,
@@ -439,6 +440,16 @@ def calibrate_camera(
         H = homographies(objs, imgs)
         K0 = zhang_intrinsics(H, size, skew=skew) if K_given is None else K_given
         starts.append((K0, *poses_from_homographies(H, K0)))
+        if K_given is None and not (0 <= K0[0, 2] <= size[0] and 0 <= K0[1, 2] <= size[1]):
+            # the closed form's principal point off the image: views that leave it
+            # ill-determined (a stereo webcam's 320 x 480 halves, pixels twice as tall as
+            # wide: cy -1522 px, and the refinement wandered 1000 iterations without a
+            # minimum); OpenCV's start (the centre) too, the lower cost kept
+            try:
+                K1 = centre_intrinsics(H, size)
+                starts.append((K1, *poses_from_homographies(H, K1)))
+            except DegenerateConfigurationError:
+                pass
     else:
         K0, rv0, tv0 = dlt_init(objs, imgs)
         starts.append((K_given if K_given is not None else K0, rv0, tv0))

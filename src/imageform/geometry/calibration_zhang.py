@@ -22,7 +22,13 @@ from imageform.geometry.dlt import estimate_projection_matrix
 from imageform.geometry.homography import estimate_homography
 from imageform.geometry.rotations import matrix_to_rvec
 
-__all__ = ["dlt_init", "homographies", "poses_from_homographies", "zhang_intrinsics"]
+__all__ = [
+    "centre_intrinsics",
+    "dlt_init",
+    "homographies",
+    "poses_from_homographies",
+    "zhang_intrinsics",
+]
 
 F64 = NDArray[np.float64]
 
@@ -123,6 +129,26 @@ def zhang_intrinsics(H: F64, image_size: tuple[int, int], *, skew: bool) -> F64:
         fx, fy = _centre_focal(Hn)
         Kn = np.array([[fx, 0.0, 0.0], [0.0, fy, 0.0], [0.0, 0.0, 1.0]])
     K = np.linalg.solve(N, Kn)
+    return K / K[2, 2]
+
+
+def centre_intrinsics(H: F64, image_size: tuple[int, int]) -> F64:
+    """K with the principal point at the image's centre and ``fx, fy`` from the homographies.
+
+    OpenCV's ``initIntrinsicParams2D`` start: each view's ``h1ᵀ ω h2 = 0`` and
+    ``h1ᵀ ω h1 = h2ᵀ ω h2`` with ``ω = diag(1/fx², 1/fy², 1)`` in pixels centred on
+    ``((w - 1)/2, (h - 1)/2)`` (Zhang 2000, eqs. (3)-(4) with the principal point known).
+    Where the views leave the principal point ill-determined (little tilt, or tilt about one
+    axis only), Zhang's closed form can put it thousands of pixels away, a start the
+    refinement does not recover from; this one stays near any real lens's.
+    """
+    w, h = image_size
+    s = 2.0 / max(w, h)
+    N = np.array([[s, 0.0, -s * (w - 1) / 2], [0.0, s, -s * (h - 1) / 2], [0.0, 0.0, 1.0]])
+    Hn = N @ H
+    Hn = Hn / np.linalg.norm(Hn, axis=(1, 2), keepdims=True)
+    fx, fy = _centre_focal(Hn)
+    K = np.linalg.solve(N, np.array([[fx, 0.0, 0.0], [0.0, fy, 0.0], [0.0, 0.0, 1.0]]))
     return K / K[2, 2]
 
 
