@@ -141,6 +141,12 @@ def test_stain_normalize(tmp_path: Path, capsys, method: str) -> None:  # type: 
         got = read_image(out4).astype(np.float64)
         assert np.abs(got - np.clip(np.asarray(api) * 255, 0, 255)).max() <= 1.0
         assert not np.array_equal(read_image(out4), read_image(out))
+    else:  # --scale-by mean is Macenko's: with reinhard a usage error, nothing written
+        out4 = tmp_path / "out4.png"
+        argv = ["stain-normalize", str(pa), "-o", str(out4), "--target", str(stats)]
+        assert main([*argv, "--method", "reinhard", "--scale-by", "mean"]) == 2
+        assert "--scale-by mean goes with --method macenko only" in capsys.readouterr().err
+        assert not out4.exists()
     # the other method with these statistics: which method saved them, not 'got kind'
     other = "reinhard" if method == "macenko" else "macenko"
     argv = ["stain-normalize", str(pa), "-o", str(tmp_path / "o3.png"), "--method", other]

@@ -234,6 +234,11 @@ class StainNormalizeOptions(ImageIn, ImageOut, RgbFrom):
         super().check()
         object.__setattr__(self, "target", Path(self.target))
         check_suffix(self.save_target, ".json", "--save-target", "the target's statistics (JSON)")
+        if self.scale_by != "max" and self.method != "macenko":
+            raise InvalidInputError(
+                f"--scale-by {self.scale_by} goes with --method macenko only (reinhard matches "
+                "the Lab means and standard deviations)"
+            )
         if self.mask is not None:
             key = str(self.mask).strip().lower()
             object.__setattr__(self, "mask", key if key in _MASK_WORDS else str(self.mask))
