@@ -319,6 +319,36 @@ def test_stain_normalize_equals_in_memory(
     assert np.abs(z * 255 - out).max() <= 0.51
 
 
+def test_stain_normalize_scale_by_mean_equals_in_memory(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`chunked stain-normalize --scale-by mean` is Macenko's mean-concentration reference, as
+    `stain-normalize --scale-by mean` in memory (to one code), unlike the default; with
+    reinhard it is refused in one line and nothing is written."""
+    from imageform import analysis
+    from imageform.io import read_image
+
+    src, _img = _he_slide(tmp_path, (384, 384), 4)
+    _, ref = _he_slide(tmp_path, (256, 256), 5)
+    target = tmp_path / "target.json"
+    analysis.macenko_stains(ref).to_json(target)
+    opts = {"target": target, "method": "macenko", "scale_by": "mean"}
+    r = process_chunked(src, tmp_path / "out.tif", "stain_normalize", opts, chunk=128)
+    out = tifffile.imread(r.output).astype(int)
+    argv = ["stain-normalize", str(src), "--target", str(target), "--scale-by", "mean"]
+    assert main([*argv, "-o", str(tmp_path / "mem.png")]) == 0
+    assert np.abs(out - read_image(tmp_path / "mem.png").astype(int)).max() <= 1
+    default = process_chunked(src, tmp_path / "max.tif", "stain_normalize", {"target": target})
+    assert not np.array_equal(tifffile.imread(default.output), out)
+    capsys.readouterr()
+    bad = tmp_path / "bad.tif"
+    argv = ["chunked", "stain-normalize", str(src), "-o", str(bad), "--target", str(target)]
+    assert main([*argv, "--method", "reinhard", "--scale-by", "mean"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--scale-by mean goes with --method macenko only" in err
+    assert not bad.exists()
+
+
 def test_stain_normalize_statistics_from_a_subsample(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -9,7 +9,7 @@ Used by :mod:`imageform.batch.chunked`.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -80,11 +80,21 @@ def _wb_gains(
     return (ref / e).astype(np.float32)
 
 
-def _stain_block(block: np.ndarray, method: str, target: Any, source: Any) -> np.ndarray:
+def _stain_block(
+    block: np.ndarray,
+    method: str,
+    target: Any,
+    source: Any,
+    scale_by: Literal["max", "mean"] = "max",
+) -> np.ndarray:
+    """Normalise one block with the slide's and the target's statistics.
+
+    ``scale_by``: Macenko's concentration reference, ``max`` or ``mean``.
+    """
     from imageform import analysis
 
     if method == "macenko":
-        out = analysis.macenko_normalize(block, target, source=source)
+        out = analysis.macenko_normalize(block, target, source=source, reference=scale_by)
     else:
         out = analysis.reinhard_normalize(block, target, source_stats=source)
     return np.asarray(out, dtype=np.float32)

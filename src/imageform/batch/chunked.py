@@ -259,7 +259,9 @@ def process_chunked(
         ``convert`` takes options ``from`` (default ``srgb``), ``to``, ``white``;
         ``white_balance`` takes ``method`` (gray_world, shades_of_gray, manual), ``p``,
         ``normalize``, ``illuminant``/``cct`` (manual); ``stain_normalize`` takes ``target``
-        (a reference image or its statistics as JSON) and ``method`` (macenko, reinhard).
+        (a reference image or its statistics as JSON), ``method`` (macenko, reinhard) and
+        ``scale_by`` (macenko: ``max``, the 99th-percentile concentrations, or ``mean``,
+        the same at any pixel size: for statistics measured on a reduced level).
     options : dict, optional
         The command's options named above (default: the command's defaults).
     chunk : int
@@ -378,7 +380,7 @@ def process_chunked(
                 stats_t, stats_s, where = _stain_stats(
                     x, opts, src_p, meta, stats_from, STAIN_SAMPLE_PIXELS
                 )
-                op = (_stain_block, opts["method"], stats_t, stats_s)
+                op = (_stain_block, opts["method"], stats_t, stats_s, opts["scale-by"])
                 displayable = True
             else:
                 transfer, space = declared_encoding(_declared(src_p))  # linear: as linear

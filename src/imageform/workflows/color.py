@@ -85,7 +85,9 @@ DISPLAYABLE_SPACES = _DISPLAYABLE
 #: (``--alpha``, ``--max-pixels`` ... were listed in ``--help`` and ignored or refused).
 CHUNKED_OPTIONS = MappingProxyType(
     {
-        "stain_normalize": MappingProxyType({"target": "target", "method": "method"}),
+        "stain_normalize": MappingProxyType(
+            {"target": "target", "method": "method", "scale_by": "scale-by"}
+        ),
         "convert": MappingProxyType({"src": "from", "dst": "to", "white": "white"}),
         "white_balance": MappingProxyType(
             {
