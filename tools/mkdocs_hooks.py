@@ -71,6 +71,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "checkerboard": "benchmarks/bench_checkerboard.py",
     "checkerboard-large": "benchmarks/check_checkerboard_large.py",
     "checkerboard-real": "benchmarks/check_checkerboard_real.py",
+    "checkerboard-refine": "benchmarks/bench_checkerboard_refine.py",
     "checkerboard-auto": "benchmarks/check_checkerboard_auto.py",
     "chunked": "benchmarks/bench_chunked.py",
     "chunked-strips": "benchmarks/bench_chunked.py",

@@ -196,3 +196,34 @@ def test_extreme_maps_and_starts_are_bounds_safe() -> None:
         b, sb = refine_local_numpy(img, pts, linv, coef, 6, 30, 1e-3)
     assert sa.tolist() == sb.tolist() and np.array_equal(a, b)
     assert sa[0] == 2 and sa[2] == 2 and np.array_equal(a[[0, 2]], pts[[0, 2]])
+
+
+@pytest.mark.parametrize("image", ["float32", "float64"])
+def test_kernel_on_threads_is_bit_for_bit_the_serial_one(image: str) -> None:
+    """Each corner's arithmetic is its own: 1 and 3 threads give the same bits."""
+    pytest.importorskip("numba")
+    from imageform._kernels import checkerboard_local as kl
+    from imageform._kernels.jit import run_tasks
+
+    img, truth, linv, coef = _maps_and_image(image)
+    rng = np.random.default_rng(4)
+    pts = np.concatenate([truth + rng.uniform(-1, 1, truth.shape), [[-2.0, 30.0]]])
+    li = np.concatenate([linv, linv[:1]]).reshape(-1, 4)
+    cf = np.concatenate([coef, coef[:1]]).reshape(-1, 18)
+    h = 6
+    w = kl.symmetric_window_weights(h)
+    i32 = img if image == "float32" else kl._EMPTY32
+    i64 = img if image == "float64" else kl._EMPTY64
+    outs = []
+    for threads in (1, 3):
+        out = pts.copy()
+        st = np.ones(len(pts), dtype=np.int64)
+        run_tasks(kl._refine_local, len(pts), i32, i64, image == "float32", out,
+                  np.ascontiguousarray(li), np.ascontiguousarray(cf), h, w, np.inf, 30, 1e-3,
+                  out, st, threads=threads)  # fmt: skip
+        outs.append((out, st))
+    assert outs[0][1].tolist() == outs[1][1].tolist()
+    assert np.array_equal(outs[0][0], outs[1][0])
+    a, sa = kl.refine_local_numba(img, pts, li.reshape(-1, 2, 2), cf.reshape(-1, 3, 3, 2), h,
+                                  30, 1e-3)  # fmt: skip
+    assert sa.tolist() == outs[0][1].tolist() and np.array_equal(a, outs[0][0])

@@ -218,3 +218,132 @@ def test_a_start_pulled_off_by_a_wide_window_does_not_slide_to_a_square_center(
     # where the wide window did no harm the symmetric corners are the default ones
     fine = np.hypot(*(grad.corners - default.corners).T) < 0.5
     assert np.median(np.hypot(*(wide.corners - default.corners)[fine].T)) < 0.01
+
+
+def _former_kernel(img: np.ndarray, pts: np.ndarray, h: int, max_iter: int, eps: float,
+                   mask: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The kernel as it was before its corners ran on threads, in plain Python floats.
+
+    Each sample interpolated alone (clamped indices), the central differences taken in the
+    sums: the same IEEE operations in the same order, so the kernel must agree bit for bit.
+    """
+    from imageform._kernels.checkerboard_symmetric import (
+        _shading_inverse,
+        put_back,
+        symmetric_pair_mask,
+        symmetric_step,
+        symmetric_window_weights,
+    )
+
+    height, width = img.shape
+    w = symmetric_window_weights(h)
+    inv0 = _shading_inverse(h, w)
+    pm = symmetric_pair_mask(mask, len(pts), h)
+    m = 2 * h + 3
+    out = pts.copy()
+    status = np.ones(len(pts), dtype=np.int64)
+    for k in range(len(pts)):
+        sx, sy = float(pts[k, 0]), float(pts[k, 1])
+        if not (np.isfinite(sx) and np.isfinite(sy)):
+            status[k] = 2
+            continue
+        wk, inv = w, inv0
+        if mask is not None:
+            wk = np.empty_like(w)
+            d11 = d12 = d22 = 0.0
+            for i in range(2 * h + 1):
+                for j in range(2 * h + 1):
+                    wt = float(w[i, j]) * float(pm[k, i, j])
+                    wk[i, j] = wt
+                    d11 += wt * (j - h) * (j - h)
+                    d12 += wt * (j - h) * (i - h)
+                    d22 += wt * (i - h) * (i - h)
+            dd = d11 * d22 - d12 * d12
+            if not (dd > 1e-8 * (d11 + d22) * (d11 + d22)):
+                status[k] = 2
+                continue
+            inv = np.array([[d22 / (4.0 * dd), -d12 / (4.0 * dd)],
+                            [-d12 / (4.0 * dd), d11 / (4.0 * dd)]])  # fmt: skip
+        cx, cy = sx, sy
+        for _ in range(max_iter):
+            fx = float(np.floor(min(max(cx, -h - 2.0), width + h + 1.0)))
+            fy = float(np.floor(min(max(cy, -h - 2.0), height + h + 1.0)))
+            ax, ay = cx - fx, cy - fy
+            x0, y0 = int(fx) - h - 1, int(fy) - h - 1
+            ys = [min(max(y0 + i, 0), height - 1) for i in range(m + 1)]
+            xs = [min(max(x0 + i, 0), width - 1) for i in range(m + 1)]
+            p = [[(1.0 - ay) * ((1.0 - ax) * float(img[ys[i], xs[j]])
+                                + ax * float(img[ys[i], xs[j + 1]]))
+                  + ay * ((1.0 - ax) * float(img[ys[i + 1], xs[j]])
+                          + ax * float(img[ys[i + 1], xs[j + 1]]))
+                  for j in range(m)] for i in range(m)]  # fmt: skip
+            s = [0.0] * 11
+            for i in range(2 * h + 1):
+                for j in range(2 * h + 1):
+                    wt = float(wk[i, j])
+                    if wt == 0.0:
+                        continue
+                    pi, pj = i + 1, j + 1
+                    qi, qj = m - 1 - pi, m - 1 - pj
+                    r = p[pi][pj] - p[qi][qj]
+                    jx = 0.5 * (p[pi][pj + 1] - p[pi][pj - 1]) - 0.5 * (
+                        p[qi][qj + 1] - p[qi][qj - 1]
+                    )
+                    jy = 0.5 * (p[pi + 1][pj] - p[pi - 1][pj]) - 0.5 * (
+                        p[qi + 1][qj] - p[qi - 1][qj]
+                    )
+                    dx, dy = -2.0 * (j - h), -2.0 * (i - h)
+                    terms = (wt * jx * jx, wt * jx * jy, wt * jy * jy, wt * jx * dx, wt * jx * dy,
+                             wt * jy * dx, wt * jy * dy, wt * jx * r, wt * jy * r, wt * dx * r,
+                             wt * dy * r)  # fmt: skip
+                    s = [a + b for a, b in zip(s, terms, strict=True)]
+            cx, cy, st = symmetric_step.py_func(
+                *s, inv[0, 0], inv[0, 1], inv[1, 0], inv[1, 1], cx, cy, width, height, eps * eps
+            )
+            if st >= 0:
+                status[k] = st
+                break
+        cx, cy, status[k] = put_back.py_func(cx, cy, sx, sy, h, status[k])
+        out[k] = cx, cy
+    return out, status
+
+
+@pytest.mark.parametrize("image", ["float32", "float64"])
+@pytest.mark.parametrize("masked", [False, True])
+def test_kernel_on_threads_is_the_former_serial_kernel_bit_for_bit(
+    image: str, masked: bool
+) -> None:
+    """The corners on 1 and 3 threads, and the former one-corner-at-a-time arithmetic, agree
+    exactly (windows inside the image and past its border, singular and non-finite starts)."""
+    pytest.importorskip("numba")
+    from imageform._kernels import checkerboard_symmetric as ks
+    from imageform._kernels.jit import run_tasks
+
+    H = homography(18.0, (160.0, 120.0), 0.5, 0.04, 9, 6)
+    img = render_board(9, 6, H, (240, 320), blur=1.0, noise=0.02, seed=5).astype(image)
+    rng = np.random.default_rng(2)
+    pts = np.concatenate([board_corners(9, 6, H)[::4] + rng.uniform(-1, 1, (14, 2)),
+                          rng.uniform(0, 320, (4, 2)),
+                          [[-2.0, 30.0], [2.0, 200.0], [318.5, 238.0], [np.nan, 3.0]]])  # fmt: skip
+    h = 4
+    mask = rng.uniform(size=(len(pts), 2 * h + 1, 2 * h + 1)) > 0.3 if masked else None
+    mask_arg = mask if masked else None
+    want, want_st = _former_kernel(img, pts, h, 30, 1e-3, mask_arg)
+    got, got_st = ks.refine_symmetric_numba(img, pts, h, 30, 1e-3, mask_arg)
+    assert got_st.tolist() == want_st.tolist()
+    assert np.array_equal(got, want, equal_nan=True)
+    # the task kernel itself on 1 and 3 threads
+    w = ks.symmetric_window_weights(h)
+    inv = ks._shading_inverse(h, w)
+    pm = ks.symmetric_pair_mask(mask_arg, len(pts), h)
+    i32 = img if image == "float32" else ks._EMPTY32
+    i64 = img if image == "float64" else ks._EMPTY64
+    outs = []
+    for threads in (1, 3):
+        out = pts.copy()
+        st = np.ones(len(pts), dtype=np.int64)
+        run_tasks(ks._refine_symmetric, len(pts), i32, i64, image == "float32", out, h, w, inv,
+                  pm, masked, 30, 1e-3, out, st, threads=threads)  # fmt: skip
+        outs.append((out, st))
+    for out, st in outs:
+        assert st.tolist() == want_st.tolist() and np.array_equal(out, want, equal_nan=True)

@@ -101,14 +101,14 @@ _BOARD_CHILD = (
     Entry(
         "checkerboard_symmetric",
         "_refine_symmetric",
-        f"(float32[:, ::1], {_A2}, boolean, {_A2}, int64, {_A2}, {_A2}, {_A3}, boolean, int64, "
-        "float64)",
+        f"(int64, int64, float32[:, ::1], {_A2}, boolean, {_A2}, int64, {_A2}, {_A2}, {_A3}, "
+        f"boolean, int64, float64, {_A2}, {_I1})",
     ),
     Entry(
         "checkerboard_local",
         "_refine_local",
-        f"(float32[:, ::1], {_A2}, boolean, {_A2}, {_A2}, {_A2}, int64, {_A2}, float64, int64, "
-        "float64)",
+        f"(int64, int64, float32[:, ::1], {_A2}, boolean, {_A2}, {_A2}, {_A2}, int64, {_A2}, "
+        f"float64, int64, float64, {_A2}, {_I1})",
     ),
 )
 

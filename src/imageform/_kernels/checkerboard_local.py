@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imageform._kernels.checkerboard_symmetric import (
+    PARALLEL_WORK,
     SINGULAR,
     finish_numpy,
     put_back,
@@ -47,7 +48,7 @@ from imageform._kernels.checkerboard_symmetric import (
     symmetric_step_numpy,
     symmetric_window_weights,
 )
-from imageform._kernels.jit import njit
+from imageform._kernels.jit import njit, run_tasks
 
 __all__ = ["refine_local_numba", "refine_local_numpy"]
 
@@ -74,10 +75,17 @@ def refine_local_numba(
     li = np.ascontiguousarray(linv, dtype=np.float64).reshape(-1, 4)
     cf = np.ascontiguousarray(coef, dtype=np.float64).reshape(-1, 18)
     ext = float(extent)
+    n = corners.shape[0]
+    out = np.array(corners, dtype=np.float64, order="C")
+    status = np.ones(n, dtype=np.int64)
+    threads = None if n * (2 * h + 1) ** 2 >= PARALLEL_WORK else 1
     if image.dtype == np.float32:
-        return _refine_local(image, _EMPTY64, True, corners, li, cf, h, w, ext, max_iter, eps)
-    img64 = np.ascontiguousarray(image, dtype=np.float64)
-    return _refine_local(_EMPTY32, img64, False, corners, li, cf, h, w, ext, max_iter, eps)
+        i32, i64, is32 = image, _EMPTY64, True
+    else:
+        i32, i64, is32 = _EMPTY32, np.ascontiguousarray(image, dtype=np.float64), False
+    args = (i32, i64, is32, out, li, cf, h, w, ext, max_iter, eps, out, status)
+    run_tasks(_refine_local, n, *args, threads=threads)
+    return out, status
 
 
 _EMPTY32 = np.empty((0, 0), dtype=np.float32)
@@ -144,8 +152,10 @@ def _sample(
     return val, gx, gy
 
 
-@njit(fastmath=False)
+@njit(fastmath=False, nogil=True)
 def _refine_local(
+    t0: int,
+    t1: int,
     image32: NDArray[np.float32],
     image64: NDArray[np.float64],
     is32: bool,
@@ -157,22 +167,24 @@ def _refine_local(
     extent: float,
     max_iter: int,
     eps: float,
-) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # pragma: no cover - numba-compiled
-    """:func:`refine_local_numba`'s kernel: ``image32`` if ``is32``, else ``image64``.
+    out: NDArray[np.float64],
+    status: NDArray[np.int64],
+) -> None:  # pragma: no cover - numba-compiled
+    """:func:`refine_local_numba`'s kernel over the corners ``t0 .. t1 - 1``.
 
+    A task of :func:`imageform._kernels.jit.run_tasks` (each corner's arithmetic its own: the
+    same corners on any number of threads). ``image32`` if ``is32``, else ``image64``.
     ``linv`` (N, 4) and ``coef`` (N, 18): the maps flattened (row-major). The sums run over
-    the first half of the window in raster order (``-d`` gives the same terms).
+    the first half of the window in raster order (``-d`` gives the same terms). Writes
+    ``out[k]`` (``corners`` may be ``out``) and ``status[k]`` (1 on entry).
     """
-    n = corners.shape[0]
     height, width = image32.shape if is32 else image64.shape
-    out = corners.copy()
-    status = np.ones(n, dtype=np.int64)
     m = 2 * h + 1
     plus = np.empty((m, m, 2))
     minus = np.empty((m, m, 2))
     wk = np.zeros((m, m))
     eps2 = eps * eps
-    for k in range(n):
+    for k in range(t0, t1):
         sx = corners[k, 0]
         sy = corners[k, 1]
         finite = np.isfinite(sx) and np.isfinite(sy)
@@ -280,7 +292,6 @@ def _refine_local(
         cx, cy, status[k] = put_back(cx, cy, sx, sy, h, status[k])
         out[k, 0] = cx
         out[k, 1] = cy
-    return out, status
 
 
 def local_offsets(

@@ -40,12 +40,17 @@ import functools
 import numpy as np
 from numpy.typing import NDArray
 
-from imageform._kernels.jit import njit
+from imageform._kernels.jit import njit, run_tasks
 
 __all__ = ["refine_symmetric_numba", "refine_symmetric_numpy", "symmetric_window_weights"]
 
 #: a step's normal matrix is singular when ``det < SINGULAR * trace²`` (an edge, a flat window)
 SINGULAR = 1e-8
+
+#: the corners run on numba's threads (:func:`imageform._kernels.jit.run_tasks`) when their
+#: windows hold at least this many offsets in all (``N (2 h + 1)²``); fewer run in the calling
+#: thread (the pool's hand-over, tens of microseconds, is then a fair share of the work)
+PARALLEL_WORK = 8192
 
 
 def symmetric_window_weights(h: int) -> NDArray[np.float64]:
@@ -98,10 +103,17 @@ def refine_symmetric_numba(
     inv = _shading_inverse(h, w)
     pm = symmetric_pair_mask(mask, corners.shape[0], h)
     has = mask is not None
+    n = corners.shape[0]
+    out = np.array(corners, dtype=np.float64, order="C")
+    status = np.ones(n, dtype=np.int64)
+    threads = None if n * (2 * h + 1) ** 2 >= PARALLEL_WORK else 1
     if image.dtype == np.float32:
-        return _refine_symmetric(image, _EMPTY64, True, corners, h, w, inv, pm, has, max_iter, eps)
-    img64 = np.ascontiguousarray(image, dtype=np.float64)
-    return _refine_symmetric(_EMPTY32, img64, False, corners, h, w, inv, pm, has, max_iter, eps)
+        i32, i64, is32 = image, _EMPTY64, True
+    else:
+        i32, i64, is32 = _EMPTY32, np.ascontiguousarray(image, dtype=np.float64), False
+    args = (i32, i64, is32, out, h, w, inv, pm, has, max_iter, eps, out, status)
+    run_tasks(_refine_symmetric, n, *args, threads=threads)
+    return out, status
 
 
 @njit(fastmath=False)
@@ -188,8 +200,10 @@ _EMPTY32 = np.empty((0, 0), dtype=np.float32)
 _EMPTY64 = np.empty((0, 0), dtype=np.float64)
 
 
-@njit(fastmath=False)
+@njit(fastmath=False, nogil=True)
 def _refine_symmetric(
+    t0: int,
+    t1: int,
     image32: NDArray[np.float32],
     image64: NDArray[np.float64],
     is32: bool,
@@ -201,24 +215,43 @@ def _refine_symmetric(
     has_mask: bool,
     max_iter: int,
     eps: float,
-) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # pragma: no cover - numba-compiled
-    """:func:`refine_symmetric_numba`'s kernel: ``image32`` if ``is32``, else ``image64``.
+    out: NDArray[np.float64],
+    status: NDArray[np.int64],
+) -> None:  # pragma: no cover - numba-compiled
+    """:func:`refine_symmetric_numba`'s kernel over the corners ``t0 .. t1 - 1``.
 
-    ``masks[k]`` (when ``has_mask``) multiplies ``w`` for corner ``k``, whose shading block is
-    then inverted here.
+    A task of :func:`imageform._kernels.jit.run_tasks`: each corner's arithmetic is its own
+    (no sum runs across corners), so the corners are the same on any number of threads.
+    ``image32`` if ``is32``, else ``image64``. ``masks[k]`` (when ``has_mask``) multiplies
+    ``w`` for corner ``k``, whose shading block is then inverted here. Writes ``out[k]``
+    (``corners`` may be ``out``: a corner is read before it is written) and ``status[k]``
+    (1 on entry). The patch is interpolated along the rows first, each row once (the same
+    products and sums as per sample); a window inside the image reads it without clamping;
+    its halved central differences are taken once per step (each serves ``d`` and ``-d``:
+    the same values); the sums skip the offsets outside the window's disk (weight 0, skipped
+    before too) and add in the same order as before.
     """
-    n = corners.shape[0]
     height, width = image32.shape if is32 else image64.shape
-    out = corners.copy()
-    status = np.ones(n, dtype=np.int64)
     m = 2 * h + 3
+    nn = 2 * h + 1
     patch = np.empty((m, m))
+    gxs = np.empty((m, m))
+    gys = np.empty((m, m))
+    rowi = np.empty((m + 1, m))
     ys = np.empty(m + 1, dtype=np.int64)
     xs = np.empty(m + 1, dtype=np.int64)
     eps2 = eps * eps
     wk = w.copy()
     inv = inv_all.copy()
-    for k in range(n):
+    # the columns j0[i] .. j1[i] - 1 of row i that hold the disk's (nonzero) weights
+    j0 = np.full(nn, nn, dtype=np.int64)
+    j1 = np.zeros(nn, dtype=np.int64)
+    for i in range(nn):
+        for j in range(nn):
+            if w[i, j] != 0.0:
+                j0[i] = min(j0[i], j)
+                j1[i] = j + 1
+    for k in range(t0, t1):
         sx = corners[k, 0]
         sy = corners[k, 1]
         if not (np.isfinite(sx) and np.isfinite(sy)):
@@ -228,8 +261,8 @@ def _refine_symmetric(
             d11 = 0.0
             d12 = 0.0
             d22 = 0.0
-            for i in range(2 * h + 1):
-                for j in range(2 * h + 1):
+            for i in range(nn):
+                for j in range(nn):
                     wt = w[i, j] * masks[k, i, j]
                     wk[i, j] = wt
                     d11 += wt * (j - h) * (j - h)
@@ -252,26 +285,41 @@ def _refine_symmetric(
             fy = np.floor(min(max(cy, -h - 2.0), height + h + 1.0))
             ax = cx - fx
             ay = cy - fy
+            bx = 1.0 - ax
+            by = 1.0 - ay
             x0 = int(fx) - h - 1
             y0 = int(fy) - h - 1
-            for i in range(m + 1):
-                ys[i] = min(max(y0 + i, 0), height - 1)
-                xs[i] = min(max(x0 + i, 0), width - 1)
+            if x0 >= 0 and y0 >= 0 and x0 + m < width and y0 + m < height:
+                for i in range(m + 1):
+                    if is32:
+                        src32 = image32[y0 + i, x0 : x0 + m + 1]
+                        for j in range(m):
+                            rowi[i, j] = bx * np.float64(src32[j]) + ax * np.float64(src32[j + 1])
+                    else:
+                        src64 = image64[y0 + i, x0 : x0 + m + 1]
+                        for j in range(m):
+                            rowi[i, j] = bx * src64[j] + ax * src64[j + 1]
+            else:
+                for i in range(m + 1):
+                    ys[i] = min(max(y0 + i, 0), height - 1)
+                    xs[i] = min(max(x0 + i, 0), width - 1)
+                for i in range(m + 1):
+                    for j in range(m):
+                        if is32:
+                            a0 = np.float64(image32[ys[i], xs[j]])
+                            a1 = np.float64(image32[ys[i], xs[j + 1]])
+                        else:
+                            a0 = image64[ys[i], xs[j]]
+                            a1 = image64[ys[i], xs[j + 1]]
+                        rowi[i, j] = bx * a0 + ax * a1
             for i in range(m):
                 for j in range(m):
-                    if is32:
-                        a00 = np.float64(image32[ys[i], xs[j]])
-                        a01 = np.float64(image32[ys[i], xs[j + 1]])
-                        a10 = np.float64(image32[ys[i + 1], xs[j]])
-                        a11 = np.float64(image32[ys[i + 1], xs[j + 1]])
-                    else:
-                        a00 = image64[ys[i], xs[j]]
-                        a01 = image64[ys[i], xs[j + 1]]
-                        a10 = image64[ys[i + 1], xs[j]]
-                        a11 = image64[ys[i + 1], xs[j + 1]]
-                    patch[i, j] = (1.0 - ay) * ((1.0 - ax) * a00 + ax * a01) + ay * (
-                        (1.0 - ax) * a10 + ax * a11
-                    )
+                    patch[i, j] = by * rowi[i, j] + ay * rowi[i + 1, j]
+            # the central differences, halved, at the window's offsets (patch's 1 .. m - 2)
+            for i in range(1, m - 1):
+                for j in range(1, m - 1):
+                    gxs[i, j] = 0.5 * (patch[i, j + 1] - patch[i, j - 1])
+                    gys[i, j] = 0.5 * (patch[i + 1, j] - patch[i - 1, j])
             # normal equations of (q, s): [[A, B], [B^T, D]] (D constant), rhs (g, e)
             a11_ = 0.0
             a12_ = 0.0
@@ -284,8 +332,8 @@ def _refine_symmetric(
             g2 = 0.0
             e1 = 0.0
             e2 = 0.0
-            for i in range(2 * h + 1):
-                for j in range(2 * h + 1):
+            for i in range(nn):
+                for j in range(j0[i], j1[i]):
                     wt = wk[i, j]
                     if wt == 0.0:
                         continue
@@ -294,12 +342,8 @@ def _refine_symmetric(
                     qi = m - 1 - pi
                     qj = m - 1 - pj
                     r = patch[pi, pj] - patch[qi, qj]
-                    jx = 0.5 * (patch[pi, pj + 1] - patch[pi, pj - 1]) - 0.5 * (
-                        patch[qi, qj + 1] - patch[qi, qj - 1]
-                    )
-                    jy = 0.5 * (patch[pi + 1, pj] - patch[pi - 1, pj]) - 0.5 * (
-                        patch[qi + 1, qj] - patch[qi - 1, qj]
-                    )
+                    jx = gxs[pi, pj] - gxs[qi, qj]
+                    jy = gys[pi, pj] - gys[qi, qj]
                     dx = -2.0 * (j - h)
                     dy = -2.0 * (i - h)
                     a11_ += wt * jx * jx
@@ -323,7 +367,6 @@ def _refine_symmetric(
         cx, cy, status[k] = put_back(cx, cy, sx, sy, h, status[k])
         out[k, 0] = cx
         out[k, 1] = cy
-    return out, status
 
 
 def symmetric_step_numpy(
