@@ -723,7 +723,7 @@ def test_a_camera_that_runs_off_falls_back(monkeypatch: pytest.MonkeyPatch) -> N
 
 def test_the_run_off_measure() -> None:
     """k1 at its bound on the keypoints or f moved a factor 3 (not a camera that did not
-    settle within it: its own note says so)."""
+    settle within it: f's verdict says its last move, _focal_said)."""
     from imageform.geometry.sfm import _ran_off
 
     # keypoints 70 px from the centre (an endoscope's field of view): r^2 = 0.25 at 140 px
@@ -733,8 +733,8 @@ def test_the_run_off_measure() -> None:
     assert "at its bound" in str(_ran_off(_fake_model(4, 4, 140.0, -1.1), 230.4, feats))
     assert "3.04 times" in str(_ran_off(_fake_model(4, 4, 700.0, 0.0), 230.4, feats))
     assert _ran_off(_fake_model(4, 4, 680.0, 0.0), 230.4, feats) is None
-    unsettled = _fake_model(4, 4, 300.0, 0.0, ("the camera did not settle: ...",))
-    assert _ran_off(unsettled, 230.4, None) is None  # its note says it
+    unsettled = _fake_model(4, 4, 300.0, 0.0, ("the last restart still moved f from ...",))
+    assert _ran_off(unsettled, 230.4, None) is None  # f's verdict says it
 
 
 def sfm_features(xy: np.ndarray) -> Any:

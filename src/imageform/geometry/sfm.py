@@ -1549,17 +1549,36 @@ def reconstruct_sequence(
 
 
 def _focal_said(rec: Reconstruction, K: ArrayLike) -> Reconstruction:
-    """``rec`` with a note where the frames do not fix its focal length (``_FOCAL_FIXED``)."""
-    if rec.K is None or rec.focal_sd_px is None or _focal_fixed(rec):
+    """``rec`` with one verdict on its focal length: fixed by the frames or not.
+
+    The verdict is ``focal_sd_px`` against ``_FOCAL_FIXED`` alone (``metrics.json``'s
+    ``intrinsics.focal_fixed``). Where the last restart still moved f by ``_FOCAL_RESTART``
+    or more (:func:`_self_calibrated`'s ``_STILL_MOVED`` note), that move, already one of
+    the standard deviation's terms (:func:`_with_spread`), is said within the verdict, not
+    as a verdict of its own: the note is folded into it, whichever way it goes.
+    """
+    if rec.K is None or rec.focal_sd_px is None:
         return rec
+    moved = next((n for n in rec.notes if n.startswith(_STILL_MOVED)), None)
+    notes = [n for n in rec.notes if n is not moved]
+    if _focal_fixed(rec):
+        if moved is None:
+            return rec
+        note = (
+            f"the focal length is fixed by the frames: {_sd_said(rec)}, at most "
+            f"{100 * _FOCAL_FIXED:.0f} %, though {moved}: that move is counted in its "
+            "standard deviation"
+        )
+        return replace(rec, notes=[*notes, note])
     f0 = float(np.asarray(K, np.float64)[0, 0])
     note = (
         f"the focal length is not fixed by the frames: {_sd_said(rec)} (more than "
-        f"{100 * _FOCAL_FIXED:.0f} %; started from {f0:.1f} px): the scale of the points "
-        "across the view is not known; calibrate the camera and give it, or more frames "
-        "that turn"
+        f"{100 * _FOCAL_FIXED:.0f} %; started from {f0:.1f} px"
+        + ("" if moved is None else f"; {moved}")
+        + "): the scale of the points across the view is not known; calibrate the camera "
+        "and give it, or more frames that turn"
     )
-    return replace(rec, notes=[*rec.notes, note])
+    return replace(rec, notes=[*notes, note])
 
 
 def _self_calibrated(
@@ -1585,8 +1604,8 @@ def _self_calibrated(
     h, w = np.asarray(images[0]).shape[:2]
     said: list[str] = []
 
-    def moved(rec: Reconstruction) -> tuple[float, float, float, float, bool]:
-        """(f and k1 started from, f and k1 found, whether either moved past its threshold)."""
+    def moved(rec: Reconstruction) -> tuple[float, float, float, float, bool, bool]:
+        """(f and k1 started from, f and k1 found, whether each moved past its threshold)."""
         assert rec.K is not None
         start, found = float(K_start[0, 0]), float(rec.K[0, 0])
         k1_start = _radial_start(lens_start) if refine_distortion else 0.0
@@ -1595,13 +1614,13 @@ def _self_calibrated(
         c = rec.K[:2, 2]
         rc2 = max((x - c[0]) ** 2 + (y - c[1]) ** 2 for x in (0, w - 1) for y in (0, h - 1))
         lens_moved = abs(k1_found - k1_start) * rc2 / found**2
-        far = abs(found / start - 1) >= _FOCAL_RESTART or lens_moved >= _RADIAL_RESTART
-        return start, found, k1_start, k1_found, far
+        f_far = abs(found / start - 1) >= _FOCAL_RESTART
+        return start, found, k1_start, k1_found, f_far, lens_moved >= _RADIAL_RESTART
 
     restarted: float | None = None  # the last restart's f: started from, found
     for _ in range(2):
-        start, found, k1_start, k1_found, far = moved(best)
-        if not far:
+        start, found, k1_start, k1_found, f_far, lens_far = moved(best)
+        if not (f_far or lens_far):
             break
         K1 = K_start.copy()
         K1[:2, :2] *= found / start
@@ -1631,20 +1650,21 @@ def _self_calibrated(
         said.append(note)
         best = replace(again, notes=[*again.notes, *said])
         K_start, lens_start = K1, lens1
-    else:  # two restarts and the camera still moves: the data do not fix it
-        start, found, k1_start, k1_found, far = moved(best)
-        if far:
-            best = replace(
-                best,
-                notes=[
-                    *best.notes,
-                    f"the camera did not settle: the last reconstruction moved f from "
-                    f"{start:.1f} to {found:.1f} px"
-                    + (f", k1 from {k1_start:.3f} to {k1_found:.3f}" if refine_distortion else "")
-                    + ": the frames do not fix it (a lens beyond one radial term, a fisheye?); "
-                    "calibrate the camera and give it",
-                ],
+    else:  # two restarts and the camera still moves
+        start, found, k1_start, k1_found, f_far, lens_far = moved(best)
+        still: list[str] = []
+        if f_far:  # f's part: said within its one verdict (_focal_said), sd widened by it
+            still.append(
+                f"{_STILL_MOVED} from {start:.1f} to {found:.1f} px "
+                f"({100 * (found / start - 1):+.1f} %)"
             )
+        if lens_far:  # the lens's: k1 alone, f's verdict is _focal_said's
+            still.append(
+                f"the lens did not settle: the last reconstruction moved k1 from "
+                f"{k1_start:.3f} to {k1_found:.3f}: one radial term does not fit the frames "
+                "(a lens beyond it, a fisheye?); calibrate the camera and give it"
+            )
+        best = replace(best, notes=[*best.notes, *still])
     return _with_spread(best, restarted)
 
 
@@ -1698,8 +1718,9 @@ def _ran_off(rec: Reconstruction, f_given: float, feats: Sequence[Features] | No
     valley (the C3VD colonoscope from 537.6 px: f 2487 px, k1 -17.8, its working camera's f
     199 px), f far from any camera the frames were taken with. ``feats``: the keypoints
     (the bound is on their farthest radius, :func:`_schur_lm`); None: f alone is checked. A
-    camera that did not settle but stayed within the factor keeps its note
-    (:func:`_self_calibrated`) and is no run-off.
+    camera that did not settle but stayed within the factor is no run-off: its last move
+    is said with f's verdict (:func:`_focal_said`), the lens's in a note of its own
+    (:func:`_self_calibrated`).
     """
     if rec.K is None:
         return None
@@ -1953,7 +1974,11 @@ def _fisheye_tried(
         f"frames, {e_chk:.2f} px, {c_chk:.0f} px^2 ({n_views} views, each error capped at "
         f"{_TRACK_CAP_PX:g} px)"
     )
-    said += f"; f fixed to {_sd_said(fish)} and {_sd_said(checked)}"
+    # each lens's own f and standard deviation, before any widening by the other's f: the
+    # verdict on the f returned is _focal_said's alone
+    said += (
+        f"; each lens alone, the fisheye's {_sd_said(fish)}, SIMPLE_RADIAL's {_sd_said(checked)}"
+    )
     off = _ran_off(fish, f_start, feats)
     if off is not None:
         return replace(checked, notes=[*checked.notes, f"{said}: it ran off ({off}): not kept"])
@@ -1973,6 +1998,10 @@ def _fisheye_tried(
         return _with_spread(kept, d, half=True)
     return _with_spread(replace(checked, notes=[*checked.notes, f"{said}: not kept"]), d, True)
 
+
+#: The start of :func:`_self_calibrated`'s note where the last restart still moved f by
+#: ``_FOCAL_RESTART`` or more; :func:`_focal_said` folds it into its verdict
+_STILL_MOVED = "the last restart still moved f"
 
 #: A focal length is fixed by the frames when its standard deviation
 #: (``Reconstruction.focal_sd_px``) is at most this share of it

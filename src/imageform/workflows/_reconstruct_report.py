@@ -126,6 +126,17 @@ def write_report(
         ["median reprojection error", _fmt(metrics.get("reprojection_px_median")) + " px"],
         ["RMS reprojection error", _fmt(metrics.get("reprojection_px_rms")) + " px"],
     ]
+    intr = metrics.get("intrinsics") or {}
+    if intr.get("focal_fixed") is not None:  # refined: its one verdict, metrics.json's
+        sd = intr.get("focal_px_sd")
+        head.append(
+            [
+                "focal length",
+                f"{intr['focal_px']:.1f} px +- "
+                + ("inf" if sd is None else f"{sd:.1f} px")
+                + (", fixed by the frames" if intr["focal_fixed"] else ", not fixed by the frames"),
+            ]
+        )
     stages = metrics.get("seconds", {})
     head += [[f"time: {k}", f"{v:.2f} s"] for k, v in stages.items()]
     overview = (

@@ -308,7 +308,7 @@ def _camera_note(intr: dict[str, Any], first: Path | None) -> str:
         ""
         if fixed is None
         else (f" +- {sd:.1f} px" if sd is not None else " +- inf")
-        + ("" if fixed else ", not fixed by the frames")
+        + (", fixed by the frames" if fixed else ", not fixed by the frames")
     )
     refined = (
         f"; refined by bundle adjustment to f = {intr['focal_px']:.1f} px{spread} "
