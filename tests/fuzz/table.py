@@ -309,6 +309,9 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.calibration_refine.refine": Skip(
         "an internal step of calibrate_camera on its packed parameter vector (fuzzed through calibrate_camera)"
     ),
+    "imageform.geometry.calibration_zhang.centre_intrinsics": Skip(
+        "an internal step of calibrate_camera (homographies of views; fuzzed through calibrate_camera)"
+    ),
     "imageform.geometry.calibration_zhang.dlt_init": call([V("points3")], [V("points3_uv")]),
     "imageform.geometry.calibration_zhang.homographies": call(V("stereo_objs"), V("stereo_left")),
     "imageform.geometry.calibration_zhang.poses_from_homographies": Skip(

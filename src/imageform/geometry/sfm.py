@@ -397,6 +397,18 @@ class Reconstruction:
     distortion: DistortionModel | None = None
     focal_sd_px: float | None = None
 
+    @property
+    def focal_fixed(self) -> bool | None:
+        """Whether the frames fix the focal length found: ``focal_sd_px`` at most 10 % of it.
+
+        None when f is held (``focal_sd_px`` None); the one verdict the notes, ``imageform
+        reconstruct``'s summary, report and ``metrics.json`` (``intrinsics.focal_fixed``)
+        state.
+        """
+        if self.focal_sd_px is None:
+            return None
+        return self.K is not None and bool(self.focal_sd_px <= _FOCAL_FIXED * float(self.K[0, 0]))
+
 
 #: The focal length's profile (:func:`_reconstruct`'s ``focal_spread``) holds it this share
 #: either side of the one found
@@ -1536,7 +1548,7 @@ def reconstruct_sequence(
     if why is None:  # a strong barrel term, at half its bound or more: a fisheye's sign
         k1 = _radial_start(best.distortion)
         share = 0.0 if feats is None else _radial_share(best, feats)
-        if checked.focal_sd_px is not None and not _focal_fixed(checked):
+        if checked.focal_sd_px is not None and not checked.focal_fixed:
             # another lens may fix f where this one does not
             why = f"SIMPLE_RADIAL's {_sd_said(checked)}: not fixed by the frames"
         elif not (k1 < 0 and share >= _FISHEYE_HINT) or checked is not best:
@@ -1561,7 +1573,7 @@ def _focal_said(rec: Reconstruction, K: ArrayLike) -> Reconstruction:
         return rec
     moved = next((n for n in rec.notes if n.startswith(_STILL_MOVED)), None)
     notes = [n for n in rec.notes if n is not moved]
-    if _focal_fixed(rec):
+    if rec.focal_fixed:
         if moved is None:
             return rec
         note = (
@@ -1984,7 +1996,7 @@ def _fisheye_tried(
         return replace(checked, notes=[*checked.notes, f"{said}: it ran off ({off}): not kept"])
     # a model whose f the frames fix beats one whose f they do not, unless it registers
     # fewer frames; else the cost (NaN, no tracks to compare: not kept)
-    fixed_fish, fixed_chk = _focal_fixed(fish), _focal_fixed(checked)
+    fixed_fish, fixed_chk = bool(fish.focal_fixed), bool(checked.focal_fixed)
     fixes = (fixed_fish and not fixed_chk) or (fixed_chk and not fixed_fish and n_chk >= n_fish)
     by_cost = not fixes and c_fish <= c_chk
     # where both lenses fix f, what the choice between them leaves open: their two f,
@@ -2006,13 +2018,6 @@ _STILL_MOVED = "the last restart still moved f"
 #: A focal length is fixed by the frames when its standard deviation
 #: (``Reconstruction.focal_sd_px``) is at most this share of it
 _FOCAL_FIXED = 0.1
-
-
-def _focal_fixed(rec: Reconstruction) -> bool:
-    """Whether the frames fix ``rec``'s focal length (``focal_sd_px``, ``_FOCAL_FIXED``)."""
-    if rec.K is None or rec.focal_sd_px is None:
-        return False
-    return bool(rec.focal_sd_px <= _FOCAL_FIXED * float(rec.K[0, 0]))
 
 
 def _sd_said(rec: Reconstruction) -> str:

@@ -474,10 +474,10 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
     # held: the focal length a bundle adjustment refining it finds (the given K's check)
     intrinsics["focal_px_fit"] = rec.focal_fit_px
     # refined: how well the frames fix it (its standard deviation; None: not refined, or
-    # too few frames), and whether that is within 10 % (reconstruct_sequence's note)
+    # too few frames), and whether that is within 10 % (the result's one verdict)
     sd = rec.focal_sd_px
     intrinsics["focal_px_sd"] = None if sd is None or not np.isfinite(sd) else float(sd)
-    intrinsics["focal_fixed"] = None if sd is None else bool(sd <= 0.1 * intrinsics["focal_px"])
+    intrinsics["focal_fixed"] = rec.focal_fixed
     # the camera found (the frame's, not its field's: the refinement scales fx and fy alike)
     K_out = np.array(K_frame, np.float64)
     K_out[:2, :2] *= intrinsics["focal_px"] / float(np.asarray(K)[0, 0])
