@@ -268,6 +268,38 @@ def test_calibrate_advises_its_own_max_iter_option(
     assert main([*args, "--max-iter", "500"]) == 0
 
 
+def test_calibrate_says_the_views_hold_one_orientation(
+    shared_data: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Boards held at one orientation with the principal point off the centre (0.1 px of
+    noise) said "did not converge ... raise --max-iter" (more iterations do not help); the
+    command now says what the views leave open and what to do, in one line, exit 1, and
+    writes nothing. The views are the simulator's (the library test's), put in place of the
+    corners found in four real views."""
+    import imageform.geometry as geometry
+    from tests.geometry.test_calibration import _one_orientation
+
+    real = geometry.calibrate_camera
+
+    def one_orientation(objs, corners, size, **kw):  # type: ignore[no-untyped-def]
+        obj, uv = _one_orientation(0.1, centre=(150.0, 112.0), seed=4)
+        return real([obj] * 10, uv, (320, 240), **kw)
+
+    monkeypatch.setattr(geometry, "calibrate_camera", one_orientation)
+    pattern = str(shared_data / "opencv-left" / "left0[1-4].jpg")
+    out = tmp_path / "cam.toml"
+    corners = tmp_path / "corners.csv"
+    args = ["calibrate", pattern, "--board", "9x6", "-o", str(out), "--corners", str(corners)]
+    assert main(args) == 1
+    line = _line(capsys)
+    assert "nearly one orientation in every view" in line, line
+    assert "about different axes" in line and "max-iter" not in line
+    assert not out.exists() and not corners.exists()
+
+
 # ---------------------------------------------------------------- tables
 
 

@@ -43,6 +43,7 @@ from imageform.errors import (
 from imageform.geometry.calibration_refine import (
     CALIBRATION_MODELS,
     RefineOutput,
+    StalledRefinement,
     global_names,
     refine,
     rodrigues,
@@ -70,6 +71,15 @@ MIN_TILT_DEG = 10.0
 #: Largest angle (degrees) between two views' board normals below which the views are
 #: nearly one orientation: the focal length then trades against the board's distance.
 MIN_SPREAD_DEG = 5.0
+#: Largest angle (degrees) of the views' board normals from one plane through the camera below
+#: which the board is tilted about nearly one axis: the focal length and the principal point
+#: are then poorly determined (Sturm & Maybank 1999, "On plane-based camera calibration: a
+#: general algorithm, singularities, applications", CVPR, sec. 4); named when the
+#: refinement finds no minimum.
+MIN_AXIS_DEG = 8.0
+#: Largest angle (degrees) between two views' board normals below which a turn about nearly
+#: one axis (:data:`MIN_AXIS_DEG`) is named as leaving the focal length open.
+MAX_AXIS_TURN_DEG = 25.0
 #: Fraction of the image area that the points of all views should span.
 MIN_COVERAGE = 0.25
 
@@ -165,6 +175,47 @@ def _orientation_problems(rvecs: F64) -> list[str]:
             "tilt it differently across views (20-45 deg, about different axes)"
         ]
     return []
+
+
+def _normal_spreads(rvecs: F64) -> tuple[float, float]:
+    """Largest angle (degrees) between two views' board normals, and from their best plane."""
+    n = rodrigues(rvecs)[:, :, 2]
+    apart = float(np.degrees(np.arccos(np.clip(np.abs(n @ n.T), 0.0, 1.0))).max())
+    off = float(np.abs(n @ np.linalg.svd(n)[2][-1]).max())
+    return apart, float(np.degrees(np.arcsin(min(off, 1.0))))
+
+
+def _stall_cause(pose_sets: list[F64]) -> str | None:
+    """Why the refinement found no minimum, from the poses of its starts and its last steps.
+
+    The start's poses come from a start K that can be far off along the very valley the
+    views leave open (a focal length twice the truth spread boards held at one orientation,
+    normals within 1.3 deg, over 5.5 deg), so each set of poses is asked: nearly one
+    orientation (or no tilt) first, then a small turn about nearly one axis: every normal
+    within :data:`MIN_AXIS_DEG` of one plane and within :data:`MAX_AXIS_TURN_DEG` of each
+    other (four of OpenCV's views, normals within 3.1 deg of a plane but 57 deg apart,
+    calibrate).
+    """
+    for rv in pose_sets:
+        why = _orientation_problems(rv)
+        if why:
+            return why[0]
+    if min(len(rv) for rv in pose_sets) < 3:
+        return None
+    near = [
+        (off, apart)
+        for apart, off in map(_normal_spreads, pose_sets)
+        if off < MIN_AXIS_DEG and apart < MAX_AXIS_TURN_DEG
+    ]
+    if not near:
+        return None
+    off, apart = min(near)
+    return (
+        f"the board is turned about nearly one axis in every view, and little (normals within "
+        f"{off:.1f} deg of one plane and {apart:.0f} deg of each other); the focal length and "
+        "principal point are not determined: add views with the board tilted 20-45 deg about "
+        "another axis"
+    )
 
 
 #: Iteration budget of the refinement of each model when ``max_iter`` is not given: the
@@ -325,7 +376,9 @@ def calibrate_camera(
     DegenerateConfigurationError
         Fewer observations than parameters, fewer than 4 points in a view, a non-planar
         target that is coplanar in a view (DLT), no tilt at all; a refinement that did not
-        converge when the boards' tilts or orientations leave the focal length open.
+        converge when the boards' tilts or orientations leave the focal length open (too
+        little tilt, nearly one orientation, or a tilt about nearly one axis in every view,
+        judged on the poses of each start and of each refinement's last step).
     ConvergenceError
         The refinement did not converge within ``max_iter`` evaluations.
 
@@ -457,6 +510,7 @@ def calibrate_camera(
     best: RefineOutput | None = None
     failure: ConvergenceError | None = None
     rv0 = starts[0][1]
+    tried = []  # the poses of every start refined and of every refinement's last step
     behind = 0
     for K0, rv, tv in starts:
         if model != "brown_conrady" and _behind_camera(objs, rv, tv):
@@ -466,6 +520,7 @@ def calibrate_camera(
             K0 = K0.copy()
             K0[0, 1] = 0.0
         g0 = np.array([K0[0, 0], K0[1, 1], K0[0, 2], K0[1, 2], K0[0, 1], *coef0])
+        tried.append(rv)
         try:
             out = refine(
                 g0,
@@ -481,6 +536,8 @@ def calibrate_camera(
             )
         except ConvergenceError as err:
             failure = failure or err
+            if isinstance(err, StalledRefinement) and err.rvecs is not None:
+                tried.append(err.rvecs)
             continue
         if best is None or float(np.sum(out.residuals**2)) < float(np.sum(best.residuals**2)):
             best, rv0 = out, rv
@@ -509,10 +566,10 @@ def calibrate_camera(
                 f"no initial pose puts every point in front of the camera ({behind} start(s) "
                 "tried); give K_init, or check the object points against the image points"
             )
-        why = _orientation_problems(rv0) if planar else []
+        why = _stall_cause([rv0, *tried]) if planar else None
         if why:  # the refinement wandered along the valley the views leave open
             raise DegenerateConfigurationError(
-                f"{why[0]} (the refinement found no minimum in {max_iter} iterations)"
+                f"{why} (the refinement found no minimum in {max_iter} iterations)"
             ) from failure
         raise failure
     out = best

@@ -25,6 +25,7 @@ __all__ = [
     "GLOBAL_NAMES",
     "MODEL_COEFFICIENTS",
     "RefineOutput",
+    "StalledRefinement",
     "global_names",
     "project_views",
     "refine",
@@ -241,6 +242,20 @@ def _skew(v: F64) -> F64:
     )
 
 
+class StalledRefinement(ConvergenceError):
+    """The refinement used its budget without a minimum; ``rvecs`` (V, 3): its last poses.
+
+    :func:`~imageform.geometry.calibrate_camera` asks of them what the views leave open
+    (one orientation, one tilt axis): the start's poses come from a start ``K`` that can be
+    far off along the very valley the refinement wanders (twice the focal length spreads
+    boards held at one orientation over 5 deg and more).
+    """
+
+    def __init__(self, message: str, rvecs: F64 | None = None) -> None:
+        super().__init__(message)
+        self.rvecs = rvecs
+
+
 @dataclass(frozen=True)
 class RefineOutput:
     """Refined parameters and the statistics of the fit."""
@@ -347,12 +362,13 @@ def refine(
 
     p0 = np.concatenate([g0[idx_free], np.concatenate([rvecs0, tvecs0], axis=1).ravel()])
     p, r, J, n_eval = levenberg_marquardt(fun, jac, p0, max_iter=max_iter, tol=tol)
-    if n_eval < 0:
-        raise ConvergenceError(
-            f"calibration refinement did not converge in {max_iter} iterations "
-            f"(RMS {np.sqrt(np.sum(r**2) / M):.4g} px); raise max_iter or check the input"
-        )
     g, rv, tv = unpack(p)
+    if n_eval < 0:
+        raise StalledRefinement(
+            f"calibration refinement did not converge in {max_iter} iterations "
+            f"(RMS {np.sqrt(np.sum(r**2) / M):.4g} px); raise max_iter or check the input",
+            rv.copy(),
+        )
     JtJ = J.T @ J
     dof = 2 * M - p.size
     sigma2 = float(np.sum(r**2)) / dof if dof > 0 else np.nan
