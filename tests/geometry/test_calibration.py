@@ -404,3 +404,15 @@ def test_tilt_about_one_axis_with_tall_pixels_converges() -> None:
     assert 0 < res.K[0, 2] < 320 and 0 < res.K[1, 2] < 480
     assert res.rms < 0.3  # 0.2 px a coordinate: 0.28 px a point
     assert abs(res.K[1, 1] / res.K[0, 0] - 2.0) < 0.05
+
+
+def test_boolean_points_are_refused_naming_the_parameter() -> None:
+    """A boolean array (a mask) given as a view's points is refused naming it, not
+    calibrated as 0/1 coordinates into a misleading 'one orientation' failure."""
+    from imageform.errors import InvalidInputError
+    from imageform.geometry import calibrate_camera
+
+    obj = np.zeros((6, 3))
+    obj[:, :2] = np.argwhere(np.ones((2, 3)))
+    with pytest.raises(InvalidInputError, match=r"image_points\[0\] as coordinates"):
+        calibrate_camera([obj], [np.ones((6, 2), bool)], (64, 48))

@@ -55,6 +55,9 @@ def _views(
         raise InvalidInputError("expected object_points of at least one view, got none")
     out_o, out_i = [], []
     for k, (o, i) in enumerate(zip(objs, imgs, strict=True)):
+        for v, nm in ((o, f"object_points[{k}]"), (i, f"{image_name}[{k}]")):
+            if str(getattr(v, "dtype", "")) in ("bool", "torch.bool"):  # a mask, not points
+                raise InvalidInputError(f"expected {nm} as coordinates, got a boolean array")
         oa = np.asarray(to_numpy(as_points_bounded(o, f"object_points[{k}]", 3)), dtype=np.float64)
         ia = np.asarray(to_numpy(as_points_bounded(i, f"{image_name}[{k}]", 2)), dtype=np.float64)
         if oa.ndim != 2 or ia.ndim != 2 or oa.shape[0] != ia.shape[0]:
