@@ -112,14 +112,17 @@ _BOARD_CHILD = (
     ),
 )
 
-#: the ArUco detector's kernels (track with a ChArUco board or one marker): the threshold's
-#: components and the codes' reading in the second process, the quads here
+#: the ArUco detector's kernels (track with a ChArUco board or one marker; frames as grey
+#: uint8 since 2026-12-01): the threshold's components and the codes' reading in the second
+#: process, the quads here
 _MARKER_CHILD = (
-    Entry("aruco", "dark_components", f"({_A2}, {_A2}, int64, int64, float64, int64, int64)"),
+    Entry(
+        "aruco", "dark_components_u8", "(uint8[:, ::1], int32[:, ::1], int64, int64, int64, int64)"
+    ),
     Entry("aruco", "decode_cells", f"({_A2}, uint8[:, :, ::1], int64, int64, float64, float64)"),
 )
 _MARKER_HERE = (
-    Entry("aruco", "box_integral_roi", f"({_A2}, int64, int64, int64, int64, int64, {_A2})"),
+    Entry("aruco", "box_integral_u8", "(uint8[:, ::1], int64, int32[:, ::1])"),
     Entry(
         "aruco", "component_quads", f"(int64[:, ::1], {_I1}, {_I1}, {_I1}, int64[:, ::1], float64)"
     ),
