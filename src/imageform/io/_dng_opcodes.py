@@ -49,6 +49,7 @@ at ``(r + 0.5, c + 0.5)`` for the vignette, as the SDK counts):
 
 from __future__ import annotations
 
+import functools
 import struct
 from dataclasses import dataclass
 from typing import Any
@@ -332,6 +333,7 @@ def _parse_vignette(data: bytes) -> FixVignetteRadial | None:
     return FixVignetteRadial((k0, k1, k2, k3, k4), (cx, cy))
 
 
+@functools.lru_cache(maxsize=1)
 def _srgb_decoding_curve() -> np.ndarray:
     """Return LibRaw's curve of a lossy DNG without MapPolynomial: 256 codes to 0..65535.
 
@@ -353,7 +355,9 @@ def _srgb_decoding_curve() -> np.ndarray:
     a = t * (1 / g - 1)
     v = np.arange(256) / 255.0
     x = np.where(v < t, v / slope, ((v + a) / (1 + a)) ** (1 / g))
-    return np.minimum(np.floor(x * 65536.0), 65535).astype(np.uint16)
+    curve = np.minimum(np.floor(x * 65536.0), 65535).astype(np.uint16)
+    curve.flags.writeable = False  # computed once (lru_cache): read, never written
+    return curve
 
 
 def lossy_dng_curves(data: bytes | None) -> tuple[np.ndarray, int]:
@@ -369,10 +373,17 @@ def lossy_dng_curves(data: bytes | None) -> tuple[np.ndarray, int]:
     curves and how many of the list's first MapPolynomials they used: those are applied
     when decoding, and not again.
     """
+    curves, used = _lossy_dng_curves(bytes(data or b""))
+    return curves.copy(), used
+
+
+@functools.lru_cache(maxsize=16)
+def _lossy_dng_curves(data: bytes) -> tuple[np.ndarray, int]:
+    """:func:`lossy_dng_curves`, computed once per OpcodeList2 (a camera's): read only."""
     curves = np.tile(_srgb_decoding_curve(), (4, 1))
     used = 0
     v = np.arange(256) / 255.0
-    for op, _flags, params in parse_opcode_list(data or b""):
+    for op, _flags, params in parse_opcode_list(data):
         if op != 8:
             continue
         if len(params) < 36:
@@ -385,6 +396,7 @@ def lossy_dng_curves(data: bytes | None) -> tuple[np.ndarray, int]:
         total = sum(c[j] * v**j for j in range(degree + 1))
         curves[plane] = np.clip(np.floor(total * 65535.0), 0, 65535).astype(np.uint16)
         used += 1
+    curves.flags.writeable = False
     return curves, used
 
 
