@@ -783,9 +783,12 @@ def test_info_names_the_decoding_polynomials(
 
 
 def test_the_dng_header_is_opened_once(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """After LibRaw, one tifffile opening serves the colour tags and the opcodes."""
+    """After LibRaw, one reading of the header serves the colour tags and the opcodes, and
+    tifffile is not opened (imageform.io._tiff_ifd reads it)."""
     pytest.importorskip("rawpy")
     import tifffile
+
+    from imageform.io import _tiff_ifd
 
     g = _radial_map(5, 5)
     gm = GainMap(0, 0, 32, 40, 0, 1, 1, 1, (0.25, 0.25), (0.0, 0.0), g)
@@ -798,10 +801,18 @@ def test_the_dng_header_is_opened_once(tmp_path: Path, monkeypatch: pytest.Monke
         opened.append(args[0])
         return real(*args, **kwargs)  # type: ignore[arg-type]
 
+    headers = []
+    read_header = _tiff_ifd.read_header
+
+    def counting_headers(p: Path) -> object:
+        headers.append(p)
+        return read_header(p)
+
     monkeypatch.setattr(tifffile, "TiffFile", counting)
+    monkeypatch.setattr(_tiff_ifd, "read_header", counting_headers)
     raw = read_raw(path)
     assert raw.metadata["opcodes_applied"] == 1 and raw.xyz_to_camera is not None
-    assert len(opened) == 1
+    assert len(headers) == 1 and not opened
 
 
 def test_warp_kernel_three_planes_in_one_pass_are_the_per_plane_values() -> None:

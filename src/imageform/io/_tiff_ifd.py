@@ -2,11 +2,11 @@
 
 :func:`imageform.io.raw.read_raw` reads a DNG's (or a TIFF-based raw's) colour tags, opcode
 lists and the end of its raw image's data before LibRaw decodes it. tifffile's ``TiffFile``
-parses every tag of the IFDs it opens, builds a page and its attributes, and costs more than
-a millisecond (and its import tens of milliseconds in a fresh process): most of a small DNG's
-fixed cost. :func:`read_header` reads IFD 0 and its SubIFDs (TIFF 6.0, section 2; the DNG
-specification 1.4.0.0, chapter 3) and decodes only the tags raw reading looks at
-(:data:`WANTED`), into objects that answer as tifffile's ``TiffPage`` does where
+parses every tag of the IFDs it opens and builds a page and its attributes: a millisecond or
+two a DNG, three to five times this reader's time, and its import in a fresh process
+(``raw-small-2026-12-01g.md``). :func:`read_header` reads IFD 0 and its SubIFDs (TIFF 6.0,
+section 2; the DNG specification 1.4.0.0, chapter 3) and decodes only the tags raw reading
+looks at (:data:`WANTED`), into objects that answer as tifffile's ``TiffPage`` does where
 :mod:`imageform.io.raw` and :mod:`imageform.io._dng_opcodes` ask (``tags`` with ``in``,
 ``[code].value``, ``.dtype``, ``valueof``, ``get``; ``dataoffsets``, ``databytecounts``,
 ``pages``), with tifffile's values: a BYTE, UNDEFINED tag's as bytes, ASCII as tifffile decodes
