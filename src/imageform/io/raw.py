@@ -1809,16 +1809,16 @@ def develop(
         # each row's samples as one run of W * C against the channels' values repeated W
         # times: the same float32 operations as broadcasting the (C,) values, ten times faster
         # (a broadcast over a last axis of 3 runs numpy's inner loop 3 samples at a time)
-        offset, factor = (
+        zero, factor = (
             black.astype(np.float32),
             (gains[: cam.shape[-1]] / span).astype(np.float32),
         )
-        if offset.ndim == 1 and factor.ndim == 1 and offset.size == factor.size == cam.shape[-1]:
+        if zero.ndim == 1 and factor.ndim == 1 and zero.size == factor.size == cam.shape[-1]:
             rows = cam.reshape(cam.shape[0], -1)
-            rows -= np.tile(offset, cam.shape[1])
+            rows -= np.tile(zero, cam.shape[1])
             rows *= np.tile(factor, cam.shape[1])
         else:  # levels of another shape (a RawImage made by hand): broadcast as given
-            cam -= offset
+            cam -= zero
             cam *= factor
         np.clip(cam, 0.0, 1.0, out=cam)
         if raw.monochrome:  # the three channels of a grey image
