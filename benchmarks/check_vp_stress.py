@@ -20,7 +20,7 @@ adds a stability check: whether a degraded version gives the horizon the origina
 (within 2 % of H), odd-numbered images with the tuning half, even-numbered with the
 held-out one.
 
-Each photograph is run as it is and in nine degraded versions (8-bit, as a camera would
+Each photograph is run as it is and in ten degraded versions (8-bit, as a camera would
 write them): ``haze 1/5`` (``0.2 I + 0.8 x 220``: fog, washed out), ``contrast 1/20``
 (``mean + (I - mean) / 20``), ``dim 1/10`` (``I / 10``: underexposed), ``gamma 2.5``
 (``255 (I / 255)^2.5``: dark mid-tones), ``dim 1/8 + noise 2`` (a dim room: ``I / 8`` plus
