@@ -185,6 +185,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "vp-manhattan": "benchmarks/check_vp_manhattan.py",
     "vp-real": "benchmarks/check_vp_real.py",
     "vp-seed": "benchmarks/check_vp_seed.py",
+    "vp-stress": "benchmarks/check_vp_stress.py",
     "wsi": "benchmarks/bench_wsi.py",
     "wsi-real": "benchmarks/check_wsi_real.py",
 }

@@ -111,6 +111,11 @@ def test_vanishing_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     payload = json.loads(capsys.readouterr().out)
     assert payload["perspective"] == 3
     assert abs(payload["K"][0][0] - 700.0) < 21.0
+    # how far resampling the segments moves the horizon: a share of the height, small here
+    assert 0 < payload["horizon_spread"] < 0.005
+    assert main(["vanishing", str(src)]) == 0
+    said = capsys.readouterr().out
+    assert "the horizon moves by ±" in said and "% of the height) when the points'" in said
     with Image.open(out) as ov:
         assert ov.size == (768, 512) and ov.mode == "RGB"
     # --max-size: segments from a copy half the size, the answers in the photograph's pixels
@@ -207,6 +212,7 @@ def test_vanishing_command_falls_back_to_the_visible_horizon(
     assert main(["vanishing", str(src), "--json"]) == 0
     payload = json.loads(capsys.readouterr().out)
     assert payload["horizon_source"] == "visible (detect_horizon)"
+    assert payload["horizon_spread"] is None  # measured for a horizon from points only
     a, b, c = payload["horizon"]
     assert abs(-c / b - rows[0]) < 2.0 and abs(-(a * 399 + c) / b - rows[1]) < 2.0
     assert main(["vanishing", str(src)]) == 0

@@ -112,7 +112,7 @@ def _with_known_K(res: Any, K: Any) -> tuple[Any, dict[str, Any]]:
     vps = res.vanishing_points
     extra: dict[str, Any] = {"vp_angles_deg": []}
     if len(vps) < 2:
-        return replace(res, K=K, vertical=None, horizon=None), extra
+        return replace(res, K=K, vertical=None, horizon=None, horizon_spread=None), extra
     dirs = _directions(K, vps)
     vertical = int(np.argmax(np.abs(dirs[:, 1])))
     up = dirs[vertical] * (-1.0 if dirs[vertical, 1] > 0 else 1.0)  # image up is -y
@@ -125,7 +125,8 @@ def _with_known_K(res: Any, K: Any) -> tuple[Any, dict[str, Any]]:
         }
         for i, j in pairs
     ]
-    return replace(res, K=K, vertical=vertical, horizon=horizon), extra
+    # the spread measured the detector's own horizon, not this one
+    return replace(res, K=K, vertical=vertical, horizon=horizon, horizon_spread=None), extra
 
 
 def _world_axes(res: Any, K: Any, R: Any) -> list[dict[str, Any]]:
@@ -183,6 +184,21 @@ def _remove_distortion(run: Run, arr: Any, image: Path) -> tuple[Any, dict[str, 
         f"{est.max_displacement_px:.1f} px) before finding lines"
     )
     return out, info
+
+
+def _spread_line(spread: float, h: int) -> str:
+    """Return the text line on how far resampling the segments moves the horizon."""
+    import math
+
+    if not math.isfinite(spread):
+        return (
+            "  the horizon is loosely fixed: fewer than half of the resamples of the points' "
+            "segments give one"
+        )
+    return (
+        f"  the horizon moves by ±{spread * h:.1f} px ({100 * spread:.2f} % of the height) "
+        "when the points' segments are resampled"
+    )
 
 
 def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path) -> Result:
@@ -285,6 +301,7 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             "K_note": res.K_note,
             "focal_spread": res.focal_spread,
             "horizon": res.horizon,
+            "horizon_spread": res.horizon_spread,
             **extra,
             "overlay": out,
         }
@@ -349,6 +366,8 @@ def vanishing(run: Run, opts: VanishingOptions, *, out: Path | None, image: Path
             text.append(f"horizon: vertical line u = {-c / a:.1f}")
         if visible:
             text.append("  the visible horizon (detect_horizon): no vanishing point gives one")
+        elif res.horizon_spread is not None:
+            text.append(_spread_line(res.horizon_spread, h))
     if out is not None:
         text.append(f"overlay -> {out}")
     return Result(summary, tuple(text))
