@@ -21,6 +21,7 @@ Medians over repetitions; ratios in the same run. Run from the project root::
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import sys
 from pathlib import Path
@@ -68,7 +69,9 @@ def cv_calibrate(corners: list[np.ndarray]) -> tuple:
     return cv2.calibrateCamera([obj] * len(pts), pts, (640, 480), None, None)
 
 
-def synthetic_views(n_views: int, partial: bool, seed: int = 0) -> tuple[list, list]:
+def synthetic_views(
+    n_views: int, partial: bool, seed: int = 0
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """Views of an 11 x 8 board (square 20) by a 640 x 480 camera with distortion, 0.2 px noise.
 
     ``partial``: each view keeps a random rectangle of the board's corners (20-60 of 88),
@@ -80,7 +83,8 @@ def synthetic_views(n_views: int, partial: bool, seed: int = 0) -> tuple[list, l
     board = checkerboard_points((11, 8), 20.0)
     K = np.array([[560.0, 0, 318], [0, 555, 242], [0, 0, 1]])
     lens = BrownConrady(k1=-0.28, k2=0.09, p1=1e-3, p2=-5e-4)
-    objs, imgs = [], []
+    objs: list[np.ndarray] = []
+    imgs: list[np.ndarray] = []
     while len(objs) < n_views:
         rv = rng.normal(0, 0.35, 3)
         t = np.array([-100.0, -70.0, 0.0]) + np.r_[rng.normal(0, 30, 2), rng.uniform(330, 520)]
@@ -138,8 +142,8 @@ def main() -> None:
         o32 = [o.astype(np.float32) for o in objs]
         i32 = [i.astype(np.float32).reshape(-1, 1, 2) for i in imgs]
         ta, tb, q, _, _ = paired_rounds(
-            lambda o=objs, i=imgs: calibrate_camera(o, i, (640, 480)),
-            lambda o=o32, i=i32: cv2.calibrateCamera(o, i, (640, 480), None, None),
+            functools.partial(calibrate_camera, objs, imgs, (640, 480)),
+            functools.partial(cv2.calibrateCamera, o32, i32, (640, 480), None, None),
             r,
         )
         mine = calibrate_camera(objs, imgs, (640, 480))

@@ -139,9 +139,13 @@ def test_refinement_with_and_without_the_kernel(model: str) -> None:
     g0 = g * (1 + rng.normal(0, 1e-3, g.size))
     free = np.ones(g.size, bool)
     free[4] = False  # skew fixed
-    kw = {"max_iter": 1000, "tol": 1e-10, "model": model}
-    a = refine(g0, rv + 0.01, tv * 1.01, obj, img, view, free, kernel=False, **kw)
-    b = refine(g0, rv + 0.01, tv * 1.01, obj, img, view, free, kernel=True, **kw)
+    a, b = (
+        refine(
+            g0, rv + 0.01, tv * 1.01, obj, img, view, free,
+            max_iter=1000, tol=1e-10, model=model, kernel=kernel,
+        )
+        for kernel in (False, True)
+    )  # fmt: skip
     assert a.n_iter == b.n_iter
     # the rational model stops somewhere along its long valley (hundreds of iterations): the
     # two paths' rounding moves that point by about 1e-8
