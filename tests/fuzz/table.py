@@ -303,17 +303,26 @@ VALID: dict[str, C | Skip] = {
         "an internal record of the calibration refinement (fuzzed through calibrate_camera)"
     ),
     "imageform.geometry.calibration_refine.global_names": call("kannala_brandt"),
+    "imageform.geometry.calibration_refine.normal_blocks": Skip(
+        "an internal step of calibrate_camera on its packed parameter vector (fuzzed through calibrate_camera)"
+    ),
     "imageform.geometry.calibration_refine.project_views": Skip(
         "an internal step of calibrate_camera on its packed parameter vector (fuzzed through calibrate_camera)"
     ),
     "imageform.geometry.calibration_refine.refine": Skip(
         "an internal step of calibrate_camera on its packed parameter vector (fuzzed through calibrate_camera)"
     ),
+    "imageform.geometry.calibration_refine.schur_step": Skip(
+        "an internal step of calibrate_camera on its normal equations' blocks (fuzzed through calibrate_camera)"
+    ),
     "imageform.geometry.calibration_zhang.centre_intrinsics": Skip(
         "an internal step of calibrate_camera (homographies of views; fuzzed through calibrate_camera)"
     ),
     "imageform.geometry.calibration_zhang.dlt_init": call([V("points3")], [V("points3_uv")]),
     "imageform.geometry.calibration_zhang.homographies": call(V("stereo_objs"), V("stereo_left")),
+    "imageform.geometry.calibration_zhang.homographies_of": Skip(
+        "an internal step of calibrate_camera on views it checked (fuzzed through homographies)"
+    ),
     "imageform.geometry.calibration_zhang.poses_from_homographies": Skip(
         "an internal step of calibrate_camera (homographies of views; fuzzed through calibrate_camera)"
     ),

@@ -112,6 +112,14 @@ _BOARD_CHILD = (
     ),
 )
 
+#: calibration's refinement: the normal equations' blocks (calibrate, stereo-calibrate)
+_CALIB_BLOCKS = Entry(
+    "calibration",
+    "calib_blocks",
+    f"(int64, {_A1}, {_A2}, {_A2}, {_A2}, {_A2}, {_I1}, boolean, {_A2}, {_A2}, {_A3}, {_A3}, "
+    f"{_A1}, {_A2})",
+)
+
 #: the ArUco detector's kernels (track with a ChArUco board or one marker; frames as grey
 #: uint8 since 2026-12-01): the threshold's components and the codes' reading in the second
 #: process, the quads here
@@ -137,8 +145,8 @@ _PNP_REFINE = Entry(
 
 #: The plans, from ``benchmarks/compile_plan.py`` (its figures: benchmarks/results).
 PLANS: dict[str, Plan] = {
-    "calibrate": Plan(child=_BOARD_CHILD, here=_BOARD_HERE),
-    "stereo-calibrate": Plan(child=_BOARD_CHILD, here=_BOARD_HERE),
+    "calibrate": Plan(child=(*_BOARD_CHILD, _CALIB_BLOCKS), here=_BOARD_HERE),
+    "stereo-calibrate": Plan(child=(*_BOARD_CHILD, _CALIB_BLOCKS), here=_BOARD_HERE),
     "characterize": Plan(
         child=(Entry("chart", "flat_gradient_numba", "(float32[:, :, ::1], float32[::1])"),)
         + _BOARD_CHILD,

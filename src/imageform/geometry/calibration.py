@@ -8,8 +8,8 @@ fixed) and one pose per view from known object points and their detected pixels,
 per view and per point) and the standard deviations of the parameters.
 
 Helpers: ``calibration_zhang`` (closed-form initial values), ``calibration_refine``
-(Levenberg-Marquardt with a sparse Jacobian structure), ``calibration_result``
-(the result dataclass and its TOML form).
+(Levenberg-Marquardt on the Jacobian's blocks, the poses eliminated by the Schur
+complement), ``calibration_result`` (the result dataclass and its TOML form).
 """
 
 from __future__ import annotations
@@ -42,6 +42,7 @@ from imageform.errors import (
 )
 from imageform.geometry.calibration_refine import (
     CALIBRATION_MODELS,
+    COND_WARN,
     RefineOutput,
     StalledRefinement,
     global_names,
@@ -53,7 +54,7 @@ from imageform.geometry.calibration_views import _views
 from imageform.geometry.calibration_zhang import (
     centre_intrinsics,
     dlt_init,
-    homographies,
+    homographies_of,
     poses_from_homographies,
     zhang_intrinsics,
 )
@@ -145,7 +146,7 @@ def _warn_conditioning(
             f"the points of all views span only {100 * span:.0f} % of the image; cover the "
             "whole frame (distortion is determined only where there are points)"
         )
-    if cond > 1e14:
+    if cond > COND_WARN:
         notes.append(f"the normal equations are nearly singular (condition number {cond:.2g})")
     for n in notes:
         warnings.warn(n, IllConditionedWarning, stacklevel=3)
@@ -483,14 +484,14 @@ def calibrate_camera(
                 raise
         if both:
             try:  # Zhang's pinhole start too: it wins on a moderately wide lens
-                H = homographies(objs, imgs)
+                H = homographies_of(objs, imgs)
                 K0 = zhang_intrinsics(H, size, skew=skew)
                 starts.append((K0, *poses_from_homographies(H, K0)))
             except (DegenerateConfigurationError, np.linalg.LinAlgError):
                 if not starts:
                     raise
     elif method == "zhang":
-        H = homographies(objs, imgs)
+        H = homographies_of(objs, imgs)
         K0 = zhang_intrinsics(H, size, skew=skew) if K_given is None else K_given
         starts.append((K0, *poses_from_homographies(H, K0)))
         if K_given is None and not (0 <= K0[0, 2] <= size[0] and 0 <= K0[1, 2] <= size[1]):

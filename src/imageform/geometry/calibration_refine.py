@@ -4,9 +4,12 @@ The parameter vector is ``[fx, fy, cx, cy, skew, <the model's coefficients>, (rv
 for each view]`` (Brown-Conrady ``k1, k2, p1, p2, k3``; rational ``k1 ... k6`` in OpenCV's
 order; Kannala-Brandt ``k1 ... k4``); fixed parameters are removed from it. Residuals are
 the reprojection errors ``(u - û, v - v̂)`` of every point. The Jacobian has a block
-structure (a view's pose moves only that view's residuals); the Jacobian is analytic and
-assembled block by block, and the Levenberg-Marquardt steps solve the small normal
-equations ``JᵀJ`` (n_params²).
+structure (a view's pose moves only that view's residuals) and is analytic; the normal
+equations ``JᵀJ`` are summed block by block (the globals' block, each view's 6 x 6 pose
+block and their cross blocks: :func:`normal_blocks`, one pass of a numba kernel where numba
+runs), and each Levenberg-Marquardt step eliminates the poses (the Schur complement,
+:func:`schur_step`) to solve the small system of the globals. Stereo calibration's refinement
+solves its dense normal equations (:func:`levenberg_marquardt`).
 """
 
 from __future__ import annotations
@@ -22,13 +25,17 @@ from imageform.errors import ConvergenceError
 
 __all__ = [
     "CALIBRATION_MODELS",
+    "COND_WARN",
     "GLOBAL_NAMES",
+    "MODEL_CODES",
     "MODEL_COEFFICIENTS",
     "RefineOutput",
     "StalledRefinement",
     "global_names",
+    "normal_blocks",
     "project_views",
     "refine",
+    "schur_step",
 ]
 
 F64 = NDArray[np.float64]
@@ -267,7 +274,7 @@ class RefineOutput:
     std_globals: F64  # 0 where fixed
     std_poses: F64  # (V, 6)
     n_iter: int
-    cond: float
+    cond: float  # of the scaled JᵀJ where it may reach COND_WARN, else a bound below that
 
 
 def levenberg_marquardt(
@@ -319,6 +326,160 @@ def levenberg_marquardt(
     return p, r, J, -1
 
 
+#: The calibration models' codes in the numba kernel (``imageform._kernels.calibration``).
+MODEL_CODES = {"brown_conrady": 0, "rational": 1, "kannala_brandt": 2}
+#: Condition number of the normalised normal equations above which calibration warns.
+COND_WARN = 1e14
+
+# the normal equations' blocks over all globals: Ug (n, n), W (V, n, 6), U (V, 6, 6), bg (n,),
+# bp (V, 6)
+Blocks = tuple[F64, F64, F64, F64, F64]
+
+
+def normal_blocks(
+    g: F64,
+    rvecs: F64,
+    tvecs: F64,
+    obj: F64,
+    img: F64,
+    view: NDArray[np.intp],
+    *,
+    model: str = "brown_conrady",
+    jac: bool = True,
+    kernel: bool | None = None,
+) -> tuple[F64, Blocks | None]:
+    """Residuals ``r`` (M, 2) (projected minus observed) and the blocks of ``JᵀJ``, ``Jᵀr``.
+
+    ``J`` is the Jacobian of ``r`` in all globals ``g`` (``fx, fy, cx, cy, skew``, the model's
+    coefficients) and each view's pose ``(rvec, t)``; the blocks are ``Ug = J_gᵀ J_g`` (n, n),
+    per view ``W_k = J_gᵀ J_k`` (V, n, 6) and ``U_k = J_kᵀ J_k`` (V, 6, 6), and the gradients
+    ``bg = J_gᵀ r`` (n,), ``bp_k = J_kᵀ r`` (V, 6) (``None`` without ``jac``). One pass of
+    the numba kernel ``imageform._kernels.calibration.calib_blocks`` where numba runs
+    (``kernel`` None: :func:`imageform._backend.use_numba`), else :func:`project_views` and
+    array products (its twin).
+    """
+    from imageform._backend import use_numba
+
+    V = rvecs.shape[0]
+    n = g.size
+    if use_numba(obj) if kernel is None else kernel:
+        from imageform._kernels.calibration import calib_blocks
+
+        r = np.empty((obj.shape[0], 2))
+        if jac:
+            out = (np.empty((n, n)), np.empty((V, n, 6)), np.empty((V, 6, 6)), np.empty(n),
+                   np.empty((V, 6)))  # fmt: skip
+        else:
+            out = (np.empty((0, 0)), np.empty((0, 0, 0)), np.empty((0, 0, 0)), np.empty(0),
+                   np.empty((0, 0)))  # fmt: skip
+        calib_blocks(
+            MODEL_CODES[model],
+            np.ascontiguousarray(g, np.float64),
+            np.ascontiguousarray(rvecs, np.float64),
+            np.ascontiguousarray(tvecs, np.float64),
+            np.ascontiguousarray(obj, np.float64),
+            np.ascontiguousarray(img, np.float64),
+            np.ascontiguousarray(view, np.int64),
+            jac,
+            r,
+            *out,
+        )
+        return r, (out if jac else None)
+    uv, Jg, Jp = project_views(g, rvecs, tvecs, obj, view, jac=jac, model=model)
+    r = uv - img
+    if not jac:
+        return r, None
+    assert Jg is not None and Jp is not None
+    Ug = np.einsum("mai,maj->ij", Jg, Jg)
+    W = np.zeros((V, n, 6))
+    np.add.at(W, view, np.einsum("mai,maj->mij", Jg, Jp))
+    U = np.zeros((V, 6, 6))
+    np.add.at(U, view, np.einsum("mai,maj->mij", Jp, Jp))
+    bg = np.einsum("mai,ma->i", Jg, r)
+    bp = np.zeros((V, 6))
+    np.add.at(bp, view, np.einsum("mai,ma->mi", Jp, r))
+    return r, (Ug, W, U, bg, bp)
+
+
+def _damped_diagonals(Ug: F64, U: F64) -> tuple[F64, F64]:
+    """Marquardt's scaling: the diagonals of ``JᵀJ``, zeros replaced by 1."""
+    dg = np.diag(Ug).copy()
+    dg[dg == 0] = 1.0
+    du = np.diagonal(U, axis1=1, axis2=2).copy()
+    du[du == 0] = 1.0
+    return dg, du
+
+
+def schur_step(Ug: F64, W: F64, U: F64, bg: F64, bp: F64, lam: float) -> tuple[F64, F64]:
+    """Solve ``(JᵀJ + λ diag(JᵀJ)) δ = -Jᵀr`` by eliminating the poses (Schur complement).
+
+    With the pose blocks ``U'_k = U_k + λ D_k``: ``(U'_g - Σ W_k U'_k⁻¹ W_kᵀ) δ_g = -b_g + Σ
+    W_k U'_k⁻¹ b_k``, then ``δ_k = -U'_k⁻¹ (b_k + W_kᵀ δ_g)`` (Triggs et al. 2000, "Bundle
+    adjustment — a modern synthesis", sec. 6.1). Returns ``(δ_g, δ_poses (V, 6))``; raises
+    ``LinAlgError`` where a system is singular.
+    """
+    n = Ug.shape[0]
+    dg, du = _damped_diagonals(Ug, U)
+    Ud = U.copy()
+    i6 = np.arange(6)
+    Ud[:, i6, i6] += lam * du
+    Z = np.linalg.solve(Ud, np.concatenate([np.swapaxes(W, 1, 2), bp[:, :, None]], axis=2))
+    ZW, Zb = Z[:, :, :n], Z[:, :, n]
+    S = Ug - np.einsum("kij,kjl->il", W, ZW)
+    S[np.arange(n), np.arange(n)] += lam * dg
+    step_g = np.linalg.solve(S, np.einsum("kij,kj->i", W, Zb) - bg)
+    step_p = -Zb - ZW @ step_g
+    return step_g, step_p
+
+
+def _statistics(blocks: Blocks, cost: float, dof: int) -> tuple[F64, float]:
+    """Return the standard deviations of every parameter and the condition of ``JᵀJ``.
+
+    ``sqrt(diag(σ² (JᵀJ)⁻¹))`` with ``σ² = cost / dof``, computed on the Jacobi-scaled
+    ``D⁻½ JᵀJ D⁻½`` (``D = diag(JᵀJ)``) by its blocks: ``S = U_g - Σ W_k U_k⁻¹ W_kᵀ``, the
+    globals' diagonal that of ``S⁻¹``, each view's that of ``U_k⁻¹ + Z_k S⁻¹ Z_kᵀ`` with
+    ``Z_k = U_k⁻¹ W_kᵀ``. The 2-norm condition number of the scaled matrix is bounded by
+    ``trace · trace of the inverse`` (both positive semi-definite); where that bound reaches
+    :data:`COND_WARN`, the matrix is assembled and its condition number computed, else the
+    bound is returned.
+    """
+    Ug, W, U, _, _ = blocks
+    n, V = Ug.shape[0], U.shape[0]
+    sg = np.sqrt(np.diag(Ug))
+    sg = np.where(sg > 0, sg, 1.0)
+    sp = np.sqrt(np.diagonal(U, axis1=1, axis2=2))
+    sp = np.where(sp > 0, sp, 1.0)
+    Ugn = Ug / np.outer(sg, sg)
+    Wn = W / (sg[None, :, None] * sp[:, None, :])
+    Un = U / (sp[:, :, None] * sp[:, None, :])
+    sigma2 = cost / dof if dof > 0 else np.nan
+    try:
+        Uinv = np.linalg.inv(Un)
+        Z = Uinv @ np.swapaxes(Wn, 1, 2)  # (V, 6, n)
+        Sinv = np.linalg.inv(Ugn - np.einsum("kij,kjl->il", Wn, Z))
+        inv_g = np.diag(Sinv)
+        inv_p = np.diagonal(Uinv, axis1=1, axis2=2) + np.einsum("kia,ab,kib->ki", Z, Sinv, Z)
+        dgn = np.concatenate([inv_g, inv_p.ravel()])
+        d2 = np.concatenate([sg, sp.ravel()]) ** 2
+        dg = dgn / d2 * sigma2
+        std = np.where(dg >= 0, np.sqrt(np.abs(dg)), np.nan)
+        bound = float(np.trace(Ugn) + np.trace(Un, axis1=1, axis2=2).sum()) * float(dgn.sum())
+        exact = not (np.all(dgn >= 0) and bound < COND_WARN)
+    except np.linalg.LinAlgError:
+        std = np.full(n + 6 * V, np.inf)
+        exact = True
+    if not exact:
+        return std, bound
+    Jn = np.zeros((n + 6 * V, n + 6 * V))
+    Jn[:n, :n] = Ugn
+    for k in range(V):
+        c = n + 6 * k
+        Jn[:n, c : c + 6] = Wn[k]
+        Jn[c : c + 6, :n] = Wn[k].T
+        Jn[c : c + 6, c : c + 6] = Un[k]
+    return std, float(np.linalg.cond(Jn))
+
+
 def refine(
     g0: F64,
     rvecs0: F64,
@@ -331,11 +492,24 @@ def refine(
     max_iter: int,
     tol: float,
     model: str = "brown_conrady",
+    kernel: bool | None = None,
 ) -> RefineOutput:
-    """Minimise the reprojection error over the free globals and all poses (TRF, sparse FD)."""
+    """Minimise the reprojection error over the free globals and all poses.
+
+    Levenberg-Marquardt with Marquardt's diagonal scaling on the analytic Jacobian's blocks
+    (:func:`normal_blocks`), each step solved by the Schur complement of the poses
+    (:func:`schur_step`): ``λ`` divided by 10 after a successful step, multiplied by 10
+    otherwise; stops when the relative decrease of the cost or the relative step falls below
+    ``tol`` (the rules of :func:`levenberg_marquardt`, whose steps it takes).
+    """
+    from imageform._backend import use_numba
+
+    if kernel is None:
+        kernel = use_numba(obj)
     V = rvecs0.shape[0]
     idx_free = np.flatnonzero(free)
     n_g = idx_free.size
+    M = obj.shape[0]
 
     def unpack(p: F64) -> tuple[F64, F64, F64]:
         g = g0.copy()
@@ -343,25 +517,52 @@ def refine(
         poses = p[n_g:].reshape(V, 6)
         return g, poses[:, :3], poses[:, 3:]
 
-    M = obj.shape[0]
-
-    def fun(p: F64) -> F64:
+    def evaluate(p: F64, jac: bool) -> tuple[F64, Blocks | None]:
         g, rv, tv = unpack(p)
-        return (project_views(g, rv, tv, obj, view, model=model)[0] - img).ravel()
+        r, b = normal_blocks(g, rv, tv, obj, img, view, model=model, jac=jac, kernel=kernel)
+        if b is None:
+            return r.ravel(), None
+        Ug, W, U, bg, bp = b
+        return r.ravel(), (Ug[np.ix_(idx_free, idx_free)], W[:, idx_free], U, bg[idx_free], bp)
 
-    cols = n_g + 6 * view[:, None] + np.arange(6)  # (M, 6) pose columns of each point
-
-    def jac(p: F64) -> F64:
-        g, rv, tv = unpack(p)
-        _, Jg, Jp = project_views(g, rv, tv, obj, view, jac=True, model=model)
-        assert Jg is not None and Jp is not None
-        J = np.zeros((M, 2, n_g + 6 * V))
-        J[:, :, :n_g] = Jg[:, :, idx_free]
-        J[np.arange(M)[:, None, None], np.arange(2)[None, :, None], cols[:, None, :]] = Jp
-        return J.reshape(2 * M, -1)
-
-    p0 = np.concatenate([g0[idx_free], np.concatenate([rvecs0, tvecs0], axis=1).ravel()])
-    p, r, J, n_eval = levenberg_marquardt(fun, jac, p0, max_iter=max_iter, tol=tol)
+    p = np.concatenate([g0[idx_free], np.concatenate([rvecs0, tvecs0], axis=1).ravel()])
+    # the kernel gives the blocks with the residuals at little more cost: at every trial step
+    r, blocks = evaluate(p, True)
+    assert blocks is not None
+    cost = float(r @ r)
+    lam = 1e-3
+    n_eval = -1
+    for it in range(1, max_iter + 1):
+        Ug, W, U, bg, bp = blocks
+        stalled = False
+        while True:
+            try:
+                step_g, step_p = schur_step(Ug, W, U, bg, bp, lam)
+            except np.linalg.LinAlgError:
+                lam *= 10.0
+                continue
+            step = np.concatenate([step_g, step_p.ravel()])
+            p_new = p + step
+            r_new, blocks_new = evaluate(p_new, kernel)
+            cost_new = float(r_new @ r_new)
+            if np.isfinite(cost_new) and cost_new <= cost:
+                break
+            lam *= 10.0
+            if lam > 1e16:
+                stalled = True
+                break
+        if stalled:
+            n_eval = it
+            break
+        small_step = np.linalg.norm(step) <= tol * (np.linalg.norm(p) + tol)
+        small_gain = cost - cost_new <= tol * cost
+        p, r, cost = p_new, r_new, cost_new
+        blocks = blocks_new if blocks_new is not None else evaluate(p, True)[1]
+        assert blocks is not None
+        lam = max(lam / 10.0, 1e-12)
+        if small_step or small_gain:
+            n_eval = it
+            break
     g, rv, tv = unpack(p)
     if n_eval < 0:
         raise StalledRefinement(
@@ -369,19 +570,7 @@ def refine(
             f"(RMS {np.sqrt(np.sum(r**2) / M):.4g} px); raise max_iter or check the input",
             rv.copy(),
         )
-    JtJ = J.T @ J
-    dof = 2 * M - p.size
-    sigma2 = float(np.sum(r**2)) / dof if dof > 0 else np.nan
-    d = np.sqrt(np.diag(JtJ))
-    d = np.where(d > 0, d, 1.0)
-    Jn = JtJ / np.outer(d, d)
-    cond = float(np.linalg.cond(Jn))
-    try:
-        cov = np.linalg.inv(Jn) / np.outer(d, d) * sigma2
-        dg = np.diag(cov)
-        std = np.where(dg >= 0, np.sqrt(np.abs(dg)), np.nan)
-    except np.linalg.LinAlgError:
-        std = np.full(p.size, np.inf)
+    std, cond = _statistics(blocks, float(np.sum(r**2)), 2 * M - p.size)
     std_g = np.zeros(g0.size)
     std_g[idx_free] = std[:n_g]
     return RefineOutput(

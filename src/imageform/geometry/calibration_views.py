@@ -6,13 +6,14 @@ closed-form initialisation, the refinement and stereo calibration).
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
-from imageform._validate import as_points_bounded, describe
+from imageform._validate import MAX_MAGNITUDE, as_points_bounded, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = ["MAX_VIEWS"]
@@ -21,6 +22,30 @@ F64 = NDArray[np.float64]
 
 #: The most views one calibration takes (each adds six unknowns to the solve).
 MAX_VIEWS = 10_000
+
+
+def _all_clean(objs: list[Any], imgs: list[Any]) -> bool:
+    """Whether every view is already what the checks below make of it, from one pass.
+
+    Float64 NumPy arrays (N, 3) and (N, 2) with the same ``N >= 4``, every value finite and
+    within :data:`~imageform._validate.MAX_MAGNITUDE`: then each view's own checks would pass
+    and return the arrays as they are. Anything else (or a value out of bounds) goes through
+    the checks view by view, which name the view.
+    """
+    for arrs, dim in ((objs, 3), (imgs, 2)):
+        for a in arrs:
+            if type(a) is not np.ndarray or a.dtype != np.float64 or a.ndim != 2:
+                return False
+            if a.shape[1] != dim or a.shape[0] < 4:
+                return False
+    if any(o.shape[0] != i.shape[0] for o, i in zip(objs, imgs, strict=True)):
+        return False
+    for arrs in (objs, imgs):
+        flat = np.concatenate([a.ravel() for a in arrs])
+        lo, hi = float(flat.min()), float(flat.max())
+        if not (math.isfinite(lo) and math.isfinite(hi)) or max(-lo, hi) > MAX_MAGNITUDE:
+            return False
+    return True
 
 
 def _views(
@@ -53,6 +78,8 @@ def _views(
         )
     if not objs:
         raise InvalidInputError("expected object_points of at least one view, got none")
+    if _all_clean(objs, imgs):
+        return objs, imgs
     out_o, out_i = [], []
     for k, (o, i) in enumerate(zip(objs, imgs, strict=True)):
         for v, nm in ((o, f"object_points[{k}]"), (i, f"{image_name}[{k}]")):
