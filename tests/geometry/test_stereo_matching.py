@@ -388,6 +388,64 @@ def test_window_costs_twin_and_sums() -> None:
         np.testing.assert_array_equal(got, np.floor(box / div + 0.5 + 1e-9))
 
 
+@pytest.mark.parametrize(
+    "shape",
+    [(1, 1, 3, 0), (2, 3, 7, -5), (4, 2, 5, 3), (9, 11, 64, 20), (30, 40, 64, -70), (6, 5, 1, 0)],
+)
+@pytest.mark.parametrize("r", [1, 2, 3])
+def test_window_costs_at_edge_sizes_are_the_twins(shape, r) -> None:  # type: ignore[no-untyped-def]
+    """The block sums (one loop over each row's W x D values since 2026-12-01g) equal the twin's
+    on images narrower and shorter than the block, disparity ranges partly or wholly outside
+    the right image and one disparity, into an output filled with garbage before (every value
+    written); the pixel costs of the same rows too (``_cost_row`` through ``cost_volume``)."""
+    from imageform._kernels import sgm
+    from imageform.geometry import _sgm_numpy as twin
+
+    h, w, n, lo = shape
+    rng = np.random.default_rng(h * 100 + w + r)
+    for nbits, (cl, cr) in (
+        (48, rng.integers(0, 2**48, (2, h, w)).astype(np.uint64)),
+        (24, rng.integers(0, 2**24, (2, h, w)).astype(np.uint64)),
+        (8, rng.integers(0, 2**8, (2, h, w)).astype(np.uint64)),
+    ):
+        div = max(1, -(-nbits * (2 * r + 1) ** 2 // 191))
+        out = np.full((h, w, n), 77, dtype=np.uint8)
+        got = sgm.window_costs(cl, cr, lo, n, nbits, r, div, out)
+        assert got is out
+        np.testing.assert_array_equal(got, twin.window_costs(cl, cr, lo, n, nbits, r, div))
+        np.testing.assert_array_equal(
+            sgm.cost_volume(cl, cr, lo, n, nbits), twin.cost_volume(cl, cr, lo, n, nbits)
+        )
+
+
+@pytest.mark.parametrize("adaptive", [False, True])
+@pytest.mark.parametrize(
+    "shape", [(1, 1, 1, 0), (2, 5, 2, 0), (7, 3, 9, -4), (19, 37, 16, 3), (31, 29, 64, 0)]
+)
+def test_the_plain_paths_are_the_slant_paths_with_no_slant(shape, adaptive) -> None:  # type: ignore[no-untyped-def]
+    """Without a slant the sweeps run a loop of their own (2026-12-01g: the slant's branches
+    cost the plain paths some 40 %); a zero slant runs the slant loop, the code of before,
+    which must give the same sums and maps bit for bit (padded paths, edge sizes, one
+    disparity, the fused selection with and without the left-right check)."""
+    h, w, n, lo = shape
+    rng = np.random.default_rng(h * 1000 + w * 10 + n)
+    cost = rng.integers(0, 191, (h, w, n)).astype(np.uint8)
+    grey = rng.uniform(0, 255, (h, w)).astype(np.float32)
+    zero = np.zeros((4, h, w), dtype=np.int32)
+    none = np.zeros((0, 1, 1), dtype=np.int32)
+    for p1, p2 in ((8, 32), (48, 192), (48, 8000)):
+        a = sgm.aggregate(cost, grey, p1, p2, adaptive)
+        np.testing.assert_array_equal(a, sgm.aggregate(cost, grey, p1, p2, adaptive, zero))
+        np.testing.assert_array_equal(a, twin.aggregate(cost, grey, p1, p2, adaptive))
+        for lr, eq in ((1.0, True), (-1.0, False), (0.0, True)):
+            t1 = np.empty(cost.shape, dtype=np.uint16)
+            t2 = np.empty(cost.shape, dtype=np.uint16)
+            m1 = sgm.match(cost, grey, p1, p2, adaptive, lo, 0.1, lr, t1, eq, none)
+            m2 = sgm.match(cost, grey, p1, p2, adaptive, lo, 0.1, lr, t2, eq, zero)
+            np.testing.assert_array_equal(m1, m2)
+            np.testing.assert_array_equal(m1, twin.select(a, lo, 0.1, lr, eq))
+
+
 def test_cost_window_averages_sensor_noise_on_a_board() -> None:
     """A fronto-parallel board (flat squares) seen by two cameras of independent noise: the
     pixel costs alone scatter the disparity inside the squares, the 3 x 3 block sums do not

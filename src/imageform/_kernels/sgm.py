@@ -135,18 +135,20 @@ def cost_volume(cl, cr, min_d, n_d, nbits, out=None):  # type: ignore[no-untyped
 
 @njit
 def _cost_row(cl, cr, y, min_d, n_d, nbits, out):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Hamming costs ``(W, n_d)`` of row ``y`` into ``out`` (:func:`cost_volume`'s row)."""
+    """Hamming costs ``(W, n_d)`` of row ``y`` into ``out`` (:func:`cost_volume`'s row).
+
+    Indexed as :func:`cost_volume` does, ``out[x, k]`` and ``cr[y, xr]``: through row views
+    (``out[x][k]``, ``cr[y][xr]``) the loop ran four times slower.
+    """
     w = cl.shape[1]
-    a = cl[y]
-    b = cr[y]
     for x in range(w):
-        o = out[x]
+        a = cl[y, x]
         for k in range(n_d):
             xr = x - (min_d + k)
             if xr < 0 or xr >= w:
-                o[k] = nbits
+                out[x, k] = nbits
             else:
-                o[k] = popcount64(a[x] ^ b[xr])
+                out[x, k] = popcount64(a ^ cr[y, xr])
 
 
 @njit
@@ -157,17 +159,22 @@ def window_costs(cl, cr, min_d, n_d, nbits, r, div, out):  # type: ignore[no-unt
     beyond the image replicated), ``C`` :func:`cost_volume`'s costs, the rounding
     ``((Σ C + div // 2) M) >> 20`` with ``M = ceil(2^20 / div)`` (the quotient rounded half up,
     exactly, for sums below 2^20 / div²). The rows of costs are computed once each, in a ring
-    of ``2r + 2`` rows; the block slides (a row in, a row out; a column in, a column out).
+    of ``2r + 2`` rows; the column sums slide down (a row in, a row out), and each row's block
+    sums add ``2r + 1`` shifted copies of them: every step one loop over the row's ``W n_d``
+    values (no loop per pixel: the vector lanes run the whole row).
     """
     h, w = cl.shape
     m = 2 * r + 1
+    wn = w * n_d
     ring = np.empty((m + 1, w, n_d), dtype=np.uint8)
     have = np.full(m + 1, -1, dtype=np.int64)
-    cs = np.zeros((w + 2 * r, n_d), dtype=np.uint16)  # the column sums, border replicated
-    t = np.empty(n_d, dtype=np.uint16)  # (2r + 1)² nbits <= 49 * 48 fits
+    # the column sums of the block's rows, flat (x, k), r columns replicated at both ends
+    cs = np.zeros((w + 2 * r) * n_d, dtype=np.uint16)
+    t = np.empty(wn, dtype=np.uint16)  # (2r + 1)² nbits + div // 2 <= 49 * 48 + 6 fits
     mul = np.uint32((2**20 + div - 1) // div)
     half = np.uint16(div // 2)
     sh = np.uint32(20)
+    c0 = r * n_d  # column 0 in cs
     for y in range(h):
         for dy in range(-r - 1, r + 1):  # the rows of the block, and the one that leaves it
             yy = min(max(y + dy, 0), h - 1)
@@ -175,42 +182,36 @@ def window_costs(cl, cr, min_d, n_d, nbits, r, div, out):  # type: ignore[no-unt
                 _cost_row(cl, cr, yy, min_d, n_d, nbits, ring[yy % (m + 1)])
                 have[yy % (m + 1)] = yy
         if y == 0:
-            for x in range(w):
-                acc = cs[x + r]
-                for k in range(n_d):
-                    acc[k] = 0
-                for dy in range(-r, r + 1):
-                    src = ring[min(max(dy, 0), h - 1) % (m + 1), x]
-                    for k in range(n_d):
-                        acc[k] += np.uint16(src[k])
+            for i in range(wn):
+                cs[c0 + i] = 0
+            for dy in range(-r, r + 1):
+                src = ring[min(max(dy, 0), h - 1) % (m + 1)].reshape(wn)
+                for i in range(wn):
+                    cs[c0 + i] += np.uint16(src[i])
         else:  # slide the block down a row
-            add = ring[min(y + r, h - 1) % (m + 1)]
-            sub = ring[max(y - r - 1, 0) % (m + 1)]
-            for x in range(w):
-                acc = cs[x + r]
-                a = add[x]
-                b = sub[x]
-                for k in range(n_d):
-                    acc[k] = acc[k] + np.uint16(a[k]) - np.uint16(b[k])
+            add = ring[min(y + r, h - 1) % (m + 1)].reshape(wn)
+            sub = ring[max(y - r - 1, 0) % (m + 1)].reshape(wn)
+            for i in range(wn):
+                cs[c0 + i] = cs[c0 + i] + np.uint16(add[i]) - np.uint16(sub[i])
+        last = c0 + wn - n_d  # column w - 1
         for x in range(r):
-            cs[x] = cs[r]
-            cs[w + r + x] = cs[w + r - 1]
-        for k in range(n_d):
-            t[k] = half
-        for dx in range(m - 1):
-            c = cs[dx]
             for k in range(n_d):
-                t[k] += c[k]
-        o_row = out[y]
-        for x in range(w):  # slide the block right a column
-            a = cs[x + m - 1]
-            o = o_row[x]
-            for k in range(n_d):
-                t[k] += a[k]
-                o[k] = np.uint8((np.uint32(t[k]) * mul) >> sh)
-            b = cs[x]
-            for k in range(n_d):
-                t[k] -= b[k]
+                cs[x * n_d + k] = cs[c0 + k]
+                cs[c0 + wn + x * n_d + k] = cs[last + k]
+        o = out[y].reshape(wn)
+        if m == 3:
+            for i in range(wn):
+                v = np.uint32(half + cs[i] + cs[i + n_d] + cs[i + 2 * n_d])
+                o[i] = np.uint8((v * mul) >> sh)
+        else:
+            for i in range(wn):
+                t[i] = half
+            for dx in range(m):
+                off = dx * n_d
+                for i in range(wn):
+                    t[i] += cs[i + off]
+            for i in range(wn):
+                o[i] = np.uint8((np.uint32(t[i]) * mul) >> sh)
     return out
 
 
@@ -263,6 +264,96 @@ def _shifted(lp, g, out):  # type: ignore[no-untyped-def]  # pragma: no cover - 
 
 
 @njit
+def _sweeps_plain(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total, equiangular):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """:func:`_sweeps` without a slant: the same numbers, none of its code in the loops.
+
+    The slant's branches (a call of :func:`_shifted` that may replace a path's vector) kept in
+    the loops cost the plain paths some 40 % of their time even where never taken; and
+    ``_p2`` is called only with ``adaptive`` (its plain value is ``p2``).
+    """
+    h, w, n = cost.shape
+    big_end = np.int16(_BIG)
+    q1 = np.int16(p1)
+    disp = np.full((h if fused else 0, w), np.nan, dtype=np.float32)
+    srow = np.empty((w, n), dtype=np.uint16)
+    claim = np.empty(w, dtype=np.int64)
+    claim_cost = np.empty(w, dtype=np.int64)
+    # rows before and this row of the three paths that come from the row before (j = 0: from
+    # x - s, 1: from x, 2: from x + s), columns shifted by one (0 and w + 1: outside)
+    prev = np.zeros((3, w + 2, n + 2), dtype=np.int16)
+    cur = np.zeros((3, w + 2, n + 2), dtype=np.int16)
+    prev_min = np.zeros((3, w + 2), dtype=np.int16)
+    cur_min = np.zeros((3, w + 2), dtype=np.int16)
+    hor = np.zeros(n + 2, dtype=np.int16)  # the horizontal path (from x - s)
+    acc = np.empty(n, dtype=np.int16)
+    for sweep in range(2):
+        s = 1 if sweep == 0 else -1
+        into_row = fused and sweep == 1
+        prev[:] = 0
+        cur[:] = 0
+        prev_min[:] = 0
+        cur_min[:] = 0
+        prev[:, :, 0] = big_end
+        prev[:, :, n + 1] = big_end
+        cur[:, :, 0] = big_end
+        cur[:, :, n + 1] = big_end
+        hor[0] = big_end
+        hor[n + 1] = big_end
+        for yi in range(h):
+            y = yi if s == 1 else h - 1 - yi
+            yp = y - s
+            for k in range(n):
+                hor[k + 1] = 0
+            hmin = np.int16(0)
+            for xi in range(w):
+                x = xi if s == 1 else w - 1 - xi
+                c = cost[y, x]
+                q = p2 if xi == 0 or not adaptive else _p2(grey, y, x, y, x - s, p1, p2, adaptive)
+                big = np.int16(hmin + q)
+                m = np.int16(32767)
+                src = hor
+                for k in range(n):
+                    a = np.int16(min(src[k], src[k + 2]) + q1)
+                    v = np.int16(np.int16(c[k]) + min(min(src[k + 1], big), a) - hmin)
+                    acc[k] = v
+                    m = min(m, v)
+                for k in range(n):  # (a slice assignment would test for overlap)
+                    hor[k + 1] = acc[k]
+                hmin = m
+                tt = srow[x] if into_row else total[y, x]
+                if sweep == 0:
+                    for k in range(n):
+                        tt[k] = np.uint16(acc[k])
+                else:
+                    t0 = total[y, x]
+                    for k in range(n):
+                        tt[k] = np.uint16(t0[k] + np.uint16(acc[k]))
+                for j in range(3):
+                    xp = x + (j - 1) * s
+                    if yi == 0 or xp < 0 or xp >= w or not adaptive:
+                        q = p2
+                    else:
+                        q = _p2(grey, y, x, yp, xp, p1, p2, adaptive)
+                    lp = prev[j, xp + 1]
+                    lm = prev_min[j, xp + 1]
+                    out = cur[j, x + 1]
+                    big = np.int16(lm + q)
+                    m = np.int16(32767)
+                    for k in range(n):
+                        a = np.int16(min(lp[k], lp[k + 2]) + q1)
+                        v = np.int16(np.int16(c[k]) + min(min(lp[k + 1], big), a) - lm)
+                        out[k + 1] = v
+                        tt[k] = np.uint16(tt[k] + v)
+                        m = min(m, v)
+                    cur_min[j, x + 1] = m
+            if into_row:
+                _select_row(srow, disp[y], min_d, keep, lr_check, claim, claim_cost, equiangular)
+            prev, cur = cur, prev
+            prev_min, cur_min = cur_min, prev_min
+    return total, disp
+
+
+@njit
 def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total, equiangular, slant):  # type: ignore[no-untyped-def]  # pragma: no cover
     """Run the two raster passes of :func:`aggregate`; with ``fused``, :func:`select` too.
 
@@ -275,6 +366,10 @@ def _sweeps(cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total, e
     reverse steps its negation); each path then compares ``L_r(p, d)`` with
     ``L_r(p - r, d - g)`` (:func:`_shifted`), a surface's slant costing no ``P1`` steps.
     """
+    if slant.shape[0] != 4:
+        return _sweeps_plain(
+            cost, grey, p1, p2, adaptive, fused, min_d, keep, lr_check, total, equiangular
+        )
     h, w, n = cost.shape
     big_end = np.int16(_BIG)
     q1 = np.int16(p1)
