@@ -149,7 +149,8 @@ PLANS: dict[str, Plan] = {
     "stereo-calibrate": Plan(child=(*_BOARD_CHILD, _CALIB_BLOCKS), here=_BOARD_HERE),
     "characterize": Plan(
         child=(Entry("chart", "flat_gradient_numba", "(float32[:, :, ::1], float32[::1])"),)
-        + _BOARD_CHILD,
+        + _BOARD_CHILD
+        + (_CALIB_BLOCKS,),
         here=_BOARD_HERE
         + (
             Entry("chart", "region_moments_numba", "(int32[:, ::1], int64)"),
