@@ -111,6 +111,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "psf": "benchmarks/bench_psf.py",
     "phone-dng": "benchmarks/check_phone_dng.py",
     "raw": "benchmarks/bench_raw.py",
+    "raw-small": "benchmarks/bench_raw_small.py",
     "raw-fresh": "benchmarks/check_raw_fresh_e.py",  # before 2026-12-01: check_raw_fresh.py
     "raw-sweep": "benchmarks/check_raw_sweep.py",
     "raw-variants": "benchmarks/check_raw_variants.py",
@@ -167,6 +168,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "stereo-slant": "benchmarks/check_stereo_slant.py",
     "stereo-recess": "benchmarks/check_stereo_recess.py",
     "stereo-fill": "benchmarks/bench_stereo_fill.py",
+    "stereo-speed": "benchmarks/bench_stereo_speed.py",
     "speed-audit": "benchmarks/speed_audit.py",
     "stereo-planes": "benchmarks/check_stereo_planes.py",
     "stereo-sgmp": "benchmarks/check_stereo_sgmp.py",
