@@ -26,19 +26,27 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks._common
+
+from benchmarks._common import (
+    alternate_trees,
+    cpu_medians,
+    matched_sgbm,
+    median_ratio,
+    read_pair,
+    stereo_pairs,
+    stereo_parser,
+)
+
 
 def _pairs(acv: Path, mb: Path, ho: Path) -> list[tuple[str, Path, Path, int, bool]]:
     return [
-        ("cones", acv / "cones" / "im2.png", acv / "cones" / "im6.png", 64, False),
-        ("teddy", acv / "teddy" / "im2.png", acv / "teddy" / "im6.png", 64, False),
-        ("adirondack", mb / "Adirondack_left.png", mb / "Adirondack_right.png", 64, False),
+        *((name, lp, rp, n, False) for name, lp, rp, n in stereo_pairs(acv, mb)),
         ("aloe (half)", ho / "aloe" / "view1.png", ho / "aloe" / "view5.png", 64, True),
     ]
 
@@ -52,61 +60,36 @@ def _worker(args: argparse.Namespace) -> None:
     cv2.setNumThreads(1)
     res = {}
     for name, lp, rp, n, half in _pairs(args.acv, args.middlebury, args.scenes_0506):
-        L, R = cv2.imread(str(lp), 0), cv2.imread(str(rp), 0)
-        if half:
-            size = (L.shape[1] // 2, L.shape[0] // 2)
-            L = cv2.resize(L, size, interpolation=cv2.INTER_AREA)
-            R = cv2.resize(R, size, interpolation=cv2.INTER_AREA)
-        sgbm = cv2.StereoSGBM_create(
-            minDisparity=0, numDisparities=n, blockSize=5, P1=8 * 25, P2=32 * 25,
-            disp12MaxDiff=1, uniquenessRatio=10, mode=cv2.STEREO_SGBM_MODE_HH,
-        )  # fmt: skip
+        L, R = read_pair(lp, rp, half=half)
+        sgbm = matched_sgbm(n)
         stereo_disparity(L, R, num_disparities=n)
         sgbm.compute(L, R)
         d = stereo_disparity(L, R, num_disparities=n, plane_fill=False)
         gl, gr = sm._grey(L, "left"), sm._grey(R, "right")
         sm._plane_fill(d, gl, 0, n, gr)
-        ours, cv, fill = [], [], []
-        for _ in range(args.per):
-            t = time.process_time()
-            sm._plane_fill(d, gl, 0, n, gr)
-            fill.append(time.process_time() - t)
-            t = time.process_time()
-            stereo_disparity(L, R, num_disparities=n)
-            ours.append(time.process_time() - t)
-            t = time.process_time()
-            sgbm.compute(L, R)
-            cv.append(time.process_time() - t)
+        fill, ours, cv = cpu_medians(
+            [
+                lambda: sm._plane_fill(d, gl, 0, n, gr),  # noqa: B023
+                lambda: stereo_disparity(L, R, num_disparities=n),  # noqa: B023
+                lambda: sgbm.compute(L, R),  # noqa: B023
+            ],
+            args.per,
+        )
         size = f"{L.shape[1]} x {L.shape[0]}"
-        res[name] = [float(np.median(ours)), float(np.median(cv)), size, n, float(np.median(fill))]
+        res[name] = [ours, cv, size, n, fill]
     print(json.dumps(res))
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--before", type=Path, required=True, help="the src/ of the tree before")
-    ap.add_argument("--after", type=Path, required=True, help="the src/ of the tree after")
-    ap.add_argument("--acv", type=Path, required=True, help="acv's hw4/testdata/")
-    ap.add_argument("--middlebury", type=Path, required=True, help="2b-t's data/")
+    ap = stereo_parser(__doc__.splitlines()[0], rounds=8, per=3)
     ap.add_argument("--scenes-0506", type=Path, required=True, help="the 2005 / 2006 scenes")
-    ap.add_argument("--rounds", type=int, default=8)
-    ap.add_argument("--per", type=int, default=3)
-    ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
-    ap.add_argument("--out", type=Path)
     args = ap.parse_args()
     if args.worker:
         _worker(args)
         return
     trees = {"before": args.before.resolve(), "after": args.after.resolve()}
-    runs: dict[str, list[dict[str, list]]] = {k: [] for k in trees}
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", NUMBA_NUM_THREADS="1")
     load0 = os.getloadavg()[0]
-    for r in range(args.rounds):
-        for k in list(trees) if r % 2 == 0 else list(trees)[::-1]:
-            env["PYTHONPATH"] = str(trees[k])
-            cmd = [sys.executable, __file__, "--worker", *sys.argv[1:]]
-            out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
-            runs[k].append(json.loads(out.stdout.strip().splitlines()[-1]))
+    runs = alternate_trees(__file__, sys.argv[1:], trees, args.rounds)
     lines = [
         "# Stereo matching: CPU time before and after, against OpenCV's StereoSGBM",
         "",
@@ -128,10 +111,10 @@ def main() -> None:
         size, n = runs["before"][0][name][2], runs["before"][0][name][3]
         lines.append(
             f"| {name} | {size} | {n} | {np.median(b):.3f} | {np.median(a):.3f} | "
-            f"{np.median(cb + ca):.3f} | {np.median(np.divide(a, b)):.2f} | "
-            f"{np.median(np.divide(b, cb)):.2f} | {np.median(np.divide(a, ca)):.2f} | "
+            f"{np.median(cb + ca):.3f} | {median_ratio(a, b):.2f} | "
+            f"{median_ratio(b, cb):.2f} | {median_ratio(a, ca):.2f} | "
             f"{np.median(fb) * 1e3:.1f} / {np.median(fa) * 1e3:.1f} "
-            f"({np.median(np.divide(fa, fb)):.2f}) |"
+            f"({median_ratio(fa, fb):.2f}) |"
         )
     text = "\n".join(lines) + "\n"
     print(text)

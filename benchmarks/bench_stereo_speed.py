@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -34,12 +33,22 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks._common
+
+from benchmarks._common import (
+    alternate_trees,
+    cpu_medians,
+    matched_sgbm,
+    median_ratio,
+    read_pair,
+    stereo_pairs,
+    stereo_parser,
+)
+
 
 def _pairs(acv: Path, mb: Path) -> list[tuple[str, Path, Path, int]]:
     return [
-        ("cones", acv / "cones" / "im2.png", acv / "cones" / "im6.png", 64),
-        ("teddy", acv / "teddy" / "im2.png", acv / "teddy" / "im6.png", 64),
-        ("adirondack", mb / "Adirondack_left.png", mb / "Adirondack_right.png", 64),
+        *stereo_pairs(acv, mb),
         ("bowling", mb / "bowling_left.png", mb / "bowling_right.png", 64),
     ]
 
@@ -69,66 +78,44 @@ def _worker(args: argparse.Namespace) -> None:
     res = {}
     maps = {}
     for name, lp, rp, n in _pairs(args.acv, args.middlebury):
-        L, R = cv2.imread(str(lp), 0), cv2.imread(str(rp), 0)
-        sgbm = cv2.StereoSGBM_create(
-            minDisparity=0, numDisparities=n, blockSize=5, P1=8 * 25, P2=32 * 25,
-            disp12MaxDiff=1, uniquenessRatio=10, mode=cv2.STEREO_SGBM_MODE_HH,
-        )  # fmt: skip
-        bm = cv2.StereoBM_create(numDisparities=n, blockSize=15)
+        L, R = read_pair(lp, rp)
+        sgbm = matched_sgbm(n)
+        bm = cv2.StereoBM_create(numDisparities=n, blockSize=15)  # type: ignore[attr-defined]
         maps[name] = stereo_disparity(L, R, num_disparities=n)
         sgbm.compute(L, R)
         bm.compute(L, R)
         gl, gr = sm._grey(L, "left"), sm._grey(R, "right")
 
         _kernels(gl, gr, n)
-        ours, kern, cv, cvbm = [], [], [], []
-        for _ in range(args.per):
-            t = time.process_time()
-            stereo_disparity(L, R, num_disparities=n)
-            ours.append(time.process_time() - t)
-            t = time.process_time()
-            _kernels(gl, gr, n)
-            kern.append(time.process_time() - t)
-            t = time.process_time()
-            sgbm.compute(L, R)
-            cv.append(time.process_time() - t)
-            t = time.process_time()
-            bm.compute(L, R)
-            cvbm.append(time.process_time() - t)
+        times = cpu_medians(
+            [
+                lambda: stereo_disparity(L, R, num_disparities=n),  # noqa: B023
+                lambda: _kernels(gl, gr, n),  # noqa: B023
+                lambda: sgbm.compute(L, R),  # noqa: B023
+                lambda: bm.compute(L, R),  # noqa: B023
+            ],
+            args.per,
+        )
         size = f"{L.shape[1]} x {L.shape[0]}"
-        res[name] = [float(np.median(v)) for v in (ours, kern, cv, cvbm)] + [size, n]
+        res[name] = [*times, size, n]
     if args.maps:
-        np.savez(args.maps, **maps)
+        np.savez(args.maps, **maps)  # type: ignore[arg-type]
     print(json.dumps(res))
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--before", type=Path, required=True, help="the src/ of the tree before")
-    ap.add_argument("--after", type=Path, required=True, help="the src/ of the tree after")
-    ap.add_argument("--acv", type=Path, required=True, help="acv's hw4/testdata/")
-    ap.add_argument("--middlebury", type=Path, required=True, help="2b-t's data/")
-    ap.add_argument("--rounds", type=int, default=6)
-    ap.add_argument("--per", type=int, default=5)
-    ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    ap = stereo_parser(__doc__.splitlines()[0], rounds=6, per=5)
     ap.add_argument("--maps", type=Path, help=argparse.SUPPRESS)
-    ap.add_argument("--out", type=Path)
     args = ap.parse_args()
     if args.worker:
         _worker(args)
         return
     trees = {"before": args.before.resolve(), "after": args.after.resolve()}
-    runs: dict[str, list[dict[str, list]]] = {k: [] for k in trees}
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", NUMBA_NUM_THREADS="1")
     load0 = os.getloadavg()[0]
     tmp = Path(tempfile.mkdtemp())
-    for r in range(args.rounds):
-        for k in list(trees) if r % 2 == 0 else list(trees)[::-1]:
-            env["PYTHONPATH"] = str(trees[k])
-            cmd = [sys.executable, __file__, "--worker", *sys.argv[1:]]
-            cmd += ["--maps", str(tmp / f"{k}.npz")]
-            out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
-            runs[k].append(json.loads(out.stdout.strip().splitlines()[-1]))
+    runs = alternate_trees(
+        __file__, sys.argv[1:], trees, args.rounds, lambda k: ["--maps", str(tmp / f"{k}.npz")]
+    )
     mb, ma = np.load(tmp / "before.npz"), np.load(tmp / "after.npz")
     lines = [
         "# Stereo matching: CPU time per pair, imageform before and after, against OpenCV",
@@ -161,8 +148,8 @@ def main() -> None:
             f"| {name} | {size} | {n} | {np.median(b) * 1e3:.1f} | {np.median(a) * 1e3:.1f} | "
             f"{np.median(kb) * 1e3:.1f} / {np.median(ka) * 1e3:.1f} | "
             f"{np.median(cb + ca) * 1e3:.1f} | {np.median(bmb + bma) * 1e3:.1f} | "
-            f"{np.median(np.divide(a, b)):.2f} | {np.median(np.divide(b, cb)):.2f} | "
-            f"{np.median(np.divide(a, ca)):.2f} | {np.median(np.divide(a, bma)):.2f} | "
+            f"{median_ratio(a, b):.2f} | {median_ratio(b, cb):.2f} | "
+            f"{median_ratio(a, ca):.2f} | {median_ratio(a, bma):.2f} | "
             f"{'yes' if same else 'NO'} |"
         )
     text = "\n".join(lines) + "\n"

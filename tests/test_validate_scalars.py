@@ -125,3 +125,29 @@ def test_describe_never_prints_an_array() -> None:
     text = describe(np.zeros((1000, 1000)))
     assert text == "ndarray of shape (1000, 1000), float64"
     assert len(describe("x" * 10_000)) == 40
+
+
+def test_points_pass_bounded_says_when_as_points_bounded_returns_the_arrays() -> None:
+    """True exactly where as_points_bounded would return each array itself, unrefused."""
+    from imageform._validate import MAX_MAGNITUDE, as_points_bounded, points_pass_bounded
+
+    good = [np.zeros((4, 2)), np.full((2, 5, 2), -MAX_MAGNITUDE), np.zeros((0, 2))]
+    assert points_pass_bounded(good, 2)
+    assert all(as_points_bounded(a, "p", 2) is a for a in good)
+    assert points_pass_bounded([], 3)
+    nan, big = np.zeros((3, 2)), np.zeros((3, 2))
+    nan[1, 0], big[2, 1] = np.nan, 2 * MAX_MAGNITUDE
+    for bad in (
+        np.zeros((4, 2), np.float32),  # converted: a new array
+        np.zeros((4, 2)).tolist(),
+        np.zeros((4, 3)),
+        np.zeros((4, 2), bool),
+        np.float64(1.0),
+        nan,
+        big,
+    ):
+        assert not points_pass_bounded([np.zeros((4, 2)), bad], 2)
+    with pytest.raises(InvalidInputError, match="NaN or inf"):
+        as_points_bounded(nan, "p", 2)
+    with pytest.raises(InvalidInputError, match="within"):
+        as_points_bounded(big, "p", 2)

@@ -82,6 +82,7 @@ __all__ = [
     "finite_result",
     "format_shape",
     "memory_limit",
+    "points_pass_bounded",
     "real_array",
     "real_pair",
     "refuse_non_real",
@@ -1232,6 +1233,37 @@ def as_float_bounded(x: object, name: str, **kw: Any) -> Any:
 def as_points_bounded(x: object, name: str, dim: int | Collection[int], **kw: Any) -> Any:
     """:func:`as_points` with ``bound=MAX_MAGNITUDE``: geometry's points."""
     return as_points(x, name, dim, bound=MAX_MAGNITUDE, **kw)
+
+
+def points_pass_bounded(arrays: Sequence[object], dim: int) -> bool:
+    """Whether every array passes :func:`as_points_bounded` as it is, from one min/max pass.
+
+    True when each is a float64 NumPy array of shape ``(..., dim)`` and their values, all
+    together, are finite and within :data:`MAX_MAGNITUDE` (:func:`check_bounded`'s rule):
+    then ``as_points_bounded(a, name, dim)`` returns every ``a`` itself, and a batch of
+    point sets (the views of a calibration) need not be checked one by one. False says
+    no more than that: check each with :func:`as_points_bounded`, which names the one that
+    fails, and why.
+
+    Examples
+    --------
+    >>> points_pass_bounded([np.zeros((4, 2)), np.ones((5, 2))], 2)
+    True
+    >>> points_pass_bounded([np.zeros((4, 2)), np.array([[np.nan, 0.0]])], 2)
+    False
+    """
+    values = []
+    for a in arrays:
+        if type(a) is not np.ndarray:
+            return False
+        if a.dtype != np.float64 or a.ndim < 1 or a.shape[-1] != dim:
+            return False
+        if a.size:
+            values.append(a.ravel())
+    if not values:
+        return True
+    lo, hi = _min_max(np.concatenate(values), np)
+    return math.isfinite(lo) and math.isfinite(hi) and max(abs(lo), abs(hi)) <= MAX_MAGNITUDE
 
 
 def as_matrix_bounded(x: object, name: str, shape: tuple[int, int], **kw: Any) -> Any:

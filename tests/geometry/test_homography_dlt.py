@@ -124,3 +124,26 @@ def test_resection_bad_input() -> None:
         estimate_projection_matrix(np.zeros((7, 3)), np.zeros((6, 2)))
     with pytest.raises(InvalidInputError, match="NaN"):
         estimate_projection_matrix(np.full((7, 3), np.nan), np.zeros((7, 2)))
+
+
+def test_masked_normalization_is_each_sets_own() -> None:
+    """A padded batch normalised with its mask: each set as alone, the padding zero."""
+    from imageform._backend import namespace
+    from imageform.geometry._normalize import similarity_normalization
+
+    rng = np.random.default_rng(3)
+    sizes = np.array([5, 9, 4])
+    sets = [rng.normal(size=(n, 2)) * 50 + 300 for n in sizes]
+    mask = np.arange(9)[None, :] < sizes[:, None]
+    padded = np.zeros((3, 9, 2))
+    padded[mask] = np.concatenate(sets)
+    xp = namespace(padded)
+    normed, T = similarity_normalization(padded, xp, mask=mask)
+    for k, p in enumerate(sets):
+        own, T_own = similarity_normalization(p, xp)
+        np.testing.assert_array_equal(normed[k, : sizes[k]], own)
+        np.testing.assert_array_equal(T[k], T_own)
+        assert np.all(normed[k, sizes[k] :] == 0)
+        # Hartley's normalisation: centred, mean distance sqrt(2)
+        np.testing.assert_allclose(own.mean(axis=0), 0, atol=1e-13)
+        np.testing.assert_allclose(np.linalg.norm(own, axis=1).mean(), np.sqrt(2), rtol=1e-14)

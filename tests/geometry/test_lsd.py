@@ -317,3 +317,25 @@ def test_methods_and_bad_inputs() -> None:
     with pytest.raises(InvalidInputError, match="validate"):
         lsd_segments(img, validate=1)  # type: ignore[arg-type]
     assert lsd_segments(np.zeros((9, 9)))[0].shape == (0, 2, 2)
+
+
+def test_grey_levels_are_the_grey_lsd_reads_without_its_checks() -> None:
+    """grey_levels (the stretch's decision) reads what grey reads, 0-255, and refuses nothing."""
+    from imageform.geometry._plumb_edges import grey, grey_levels, luma_601
+
+    rng = np.random.default_rng(4)
+    rgb8 = rng.integers(0, 256, (6, 7, 3), dtype=np.uint8)
+    # Rec. 601 (ITU-R BT.601-7): Y' = 0.299 R' + 0.587 G' + 0.114 B'
+    assert float(luma_601(np.array([255.0, 0.0, 0.0]))) == 0.299 * 255.0
+    for img in (rgb8, rgb8[..., 0], rgb8[..., :1], rgb8.astype(np.uint16) * 257, rgb8 / 255.0):
+        levels = grey_levels(img)
+        assert levels is not None and levels.dtype == np.float64 and levels.shape == (6, 7)
+        # grey reads uint8/uint16 through float32 (as_image): the same levels to its precision
+        np.testing.assert_allclose(levels, grey(img) * 255.0, rtol=1e-6, atol=1e-4)
+    np.testing.assert_array_equal(grey_levels(rgb8[..., 0]), rgb8[..., 0])
+    for refused in (np.zeros((4, 4, 4)), np.zeros((4, 4), np.int32), np.zeros((4, 4), bool)):
+        assert grey_levels(refused) is None
+        with pytest.raises(InvalidInputError):
+            grey(refused)
+    nan = np.full((3, 3), np.nan)
+    assert np.isnan(grey_levels(nan)).all()  # left to the caller (grey refuses it)

@@ -172,3 +172,24 @@ def test_no_full_size_float_temporary() -> None:
         tracemalloc.stop()
     # the uint16 output and small tables; a float32 RGB image alone would be twice the output
     assert peak < 1.25 * out.nbytes, (peak, out.nbytes)
+
+
+def test_raw_caches_are_read_only_and_not_copied() -> None:
+    """The cached matrices and curves are read-only and handed out as they are; what a
+    caller may change (a Development's matrices, the kernels' table) is its own copy."""
+    from imageform.io._dng_opcodes import lossy_dng_curves
+    from imageform.io.icc import _references
+    from imageform.io.raw import _space_matrices, _transfer_table, _transfer_table_cached
+
+    mats = _space_matrices("display_p3")
+    assert all(not m.flags.writeable for m in mats)
+    assert all(a is b for a, b in zip(mats, _space_matrices("display_p3"), strict=True))
+    # D65 (IEC 61966-2-1: x 0.3127, y 0.3290, 4 decimals): X = x / y, Z = (1 - x - y) / y
+    np.testing.assert_allclose(mats[0], [0.3127 / 0.3290, 1.0, 0.3583 / 0.3290], rtol=2e-4)
+    curves, used = lossy_dng_curves(None)
+    assert used == 0 and not curves.flags.writeable and curves is lossy_dng_curves(None)[0]
+    assert curves[0, 255] == 65535
+    assert all(not a.flags.writeable for ref in _references() for a in ref[1:])
+    lut = _transfer_table("srgb")  # the render kernels' one signature takes writable arrays
+    assert lut.flags.writeable and not _transfer_table_cached("srgb", 1.0).flags.writeable
+    np.testing.assert_array_equal(lut, _transfer_table_cached("srgb", 1.0))

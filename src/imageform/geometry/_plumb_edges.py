@@ -1,7 +1,8 @@
 """Edge points and edge contours for :mod:`imageform.geometry.plumb_line` (internal).
 
-``grey`` reads the image, ``edge_points`` finds sub-pixel edge points with their gradient
-directions, ``contours`` groups them into connected contours of one direction sector.
+``grey`` reads the image (``grey_levels`` without its checks), ``edge_points`` finds sub-pixel
+edge points with their gradient directions, ``contours`` groups them into connected contours
+of one direction sector.
 """
 
 from __future__ import annotations
@@ -11,10 +12,25 @@ import math
 import numpy as np
 
 from imageform._typing import ArrayLike, FloatArray
-from imageform._validate import as_image
+from imageform._validate import _INTEGER_SCALE, as_image
 from imageform.errors import InvalidInputError
 
-__all__ = ["contours", "edge_points", "grey"]
+__all__ = ["contours", "edge_points", "grey", "grey_levels", "luma_601"]
+
+
+def luma_601(rgb: FloatArray) -> FloatArray:
+    r"""Rec. 601 luma of encoded RGB ``(..., 3)``, in the scale of the input, unchecked.
+
+    .. math:: Y' = 0.299 R' + 0.587 G' + 0.114 B'
+
+    (ITU-R BT.601-7, section 2.5.1): the grey of :func:`grey` and :func:`grey_levels`.
+
+    Examples
+    --------
+    >>> float(luma_601(np.array([200.0, 100.0, 50.0])))
+    124.2
+    """
+    return rgb[..., 0] * 0.299 + rgb[..., 1] * 0.587 + rgb[..., 2] * 0.114
 
 
 def grey(image: ArrayLike) -> FloatArray:
@@ -26,8 +42,7 @@ def grey(image: ArrayLike) -> FloatArray:
     if arr.ndim == 2:
         img = as_image(arr[..., None], "image", channels=1)[..., 0]
     elif arr.ndim == 3 and arr.shape[-1] == 3:
-        rgb = as_image(arr, "image")
-        img = rgb[..., 0] * 0.299 + rgb[..., 1] * 0.587 + rgb[..., 2] * 0.114  # Rec. 601 luma
+        img = luma_601(as_image(arr, "image"))
     elif arr.ndim == 3 and arr.shape[-1] == 1:
         img = as_image(arr, "image", channels=1)[..., 0]
     else:
@@ -35,6 +50,37 @@ def grey(image: ArrayLike) -> FloatArray:
             f"expected a grey (H, W) or RGB (H, W, 3) image, got shape {arr.shape}"
         )
     return np.asarray(img, dtype=np.float64)
+
+
+def grey_levels(image: ArrayLike) -> FloatArray | None:
+    """Grey levels 0-255 (float64) of a grey or RGB image, without :func:`grey`'s checks.
+
+    For code that only decides something from an image that :func:`grey` reads later (and
+    refuses, if it must, with its message): the full range of ``uint8`` / ``uint16`` (as
+    :func:`~imageform._validate.as_image` takes it) or floats in [0, 1] mapped to 0-255, in
+    float64 throughout, then :func:`luma_601` of RGB. ``None`` for a shape or dtype that
+    :func:`grey` refuses; NaN, inf and out-of-range values come back as they are.
+
+    Examples
+    --------
+    >>> grey_levels(np.array([[0, 128, 255]], np.uint8)).tolist()
+    [[0.0, 128.0, 255.0]]
+    >>> grey_levels(np.zeros((2, 2, 4))) is None
+    True
+    """
+    arr = np.asarray(image)
+    if arr.ndim == 3 and arr.shape[-1] == 1:
+        arr = arr[..., 0]
+    if not (arr.ndim == 2 or (arr.ndim == 3 and arr.shape[-1] == 3)):
+        return None
+    if str(arr.dtype) in _INTEGER_SCALE:  # as as_image names them (not a byte-swapped one)
+        full = _INTEGER_SCALE[str(arr.dtype)]
+    elif np.issubdtype(arr.dtype, np.floating):
+        full = 1.0
+    else:
+        return None
+    levels = arr.astype(np.float64) * (255.0 / full)
+    return luma_601(levels) if levels.ndim == 3 else levels
 
 
 def edge_points(img: FloatArray, threshold: float) -> tuple[FloatArray, FloatArray]:

@@ -6,14 +6,13 @@ closed-form initialisation, the refinement and stereo calibration).
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy
-from imageform._validate import MAX_MAGNITUDE, as_points_bounded, describe
+from imageform._validate import as_points_bounded, describe, points_pass_bounded
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
 
 __all__ = ["MAX_VIEWS"]
@@ -27,25 +26,21 @@ MAX_VIEWS = 10_000
 def _all_clean(objs: list[Any], imgs: list[Any]) -> bool:
     """Whether every view is already what the checks below make of it, from one pass.
 
-    Float64 NumPy arrays (N, 3) and (N, 2) with the same ``N >= 4``, every value finite and
-    within :data:`~imageform._validate.MAX_MAGNITUDE`: then each view's own checks would pass
-    and return the arrays as they are. Anything else (or a value out of bounds) goes through
-    the checks view by view, which name the view.
+    Every array passes :func:`~imageform._validate.as_points_bounded` as it is
+    (:func:`~imageform._validate.points_pass_bounded`: float64 NumPy, finite, within
+    :data:`~imageform._validate.MAX_MAGNITUDE`), and the views are (N, 3) and (N, 2) with the
+    same ``N >= 4``: then each view's own checks would pass and return the arrays as they
+    are. Anything else goes through the checks view by view, which name the view.
     """
-    for arrs, dim in ((objs, 3), (imgs, 2)):
-        for a in arrs:
-            if type(a) is not np.ndarray or a.dtype != np.float64 or a.ndim != 2:
-                return False
-            if a.shape[1] != dim or a.shape[0] < 4:
-                return False
-    if any(o.shape[0] != i.shape[0] for o, i in zip(objs, imgs, strict=True)):
-        return False
-    for arrs in (objs, imgs):
-        flat = np.concatenate([a.ravel() for a in arrs])
-        lo, hi = float(flat.min()), float(flat.max())
-        if not (math.isfinite(lo) and math.isfinite(hi)) or max(-lo, hi) > MAX_MAGNITUDE:
-            return False
-    return True
+    shapes_ok = all(
+        type(o) is np.ndarray
+        and type(i) is np.ndarray
+        and o.ndim == 2
+        and i.ndim == 2
+        and o.shape[0] == i.shape[0] >= 4
+        for o, i in zip(objs, imgs, strict=True)
+    )
+    return shapes_ok and points_pass_bounded(objs, 3) and points_pass_bounded(imgs, 2)
 
 
 def _views(

@@ -19,7 +19,7 @@ from imageform.errors import DegenerateConfigurationError
 from imageform.geometry.calibration_views import _views
 from imageform.geometry.camera import decompose_projection_matrix
 from imageform.geometry.dlt import estimate_projection_matrix
-from imageform.geometry.homography import estimate_homography
+from imageform.geometry.homography import _homographies_padded
 from imageform.geometry.rotations import matrix_to_rvec
 
 __all__ = [
@@ -52,64 +52,22 @@ def homographies(object_points: list[F64], image_points: list[F64]) -> F64:
     return homographies_of(object_points, image_points)
 
 
-#: A view whose points are this close to one line (smallest over largest singular value of
-#: the centred points), or whose DLT system is this close to rank 7, is solved on its own by
-#: :func:`~imageform.geometry.estimate_homography` (which refuses it, or solves it, as alone).
-_SUSPECT = 1e-6
-
-
 def homographies_of(object_points: list[F64], image_points: list[F64]) -> F64:
     """``H_k`` (V, 3, 3) of views already checked (:func:`homographies` checks them first).
 
+    The views padded to one batch and solved by
+    :func:`~imageform.geometry.homography._homographies_padded`:
     :func:`~imageform.geometry.estimate_homography`'s normalised DLT (Hartley & Zisserman
-    Algorithm 4.2) of every view in one padded batch: each view normalised over its own
-    points, zero rows for the padding of views with fewer points, which leave ``AᵀA``, and so
-    the singular values and the null vector, as they are. A view of 4 points, or
-    nearly collinear points, or a nearly rank-deficient system (:data:`_SUSPECT`) is solved
-    on its own, so that it is refused with the same message as alone.
+    Algorithm 4.2) of every view at once, a doubtful view on its own (refused with the same
+    message as alone).
     """
     sizes = np.array([o.shape[0] for o in object_points])
-    V, N = sizes.size, int(sizes.max())
-    mask = np.arange(N)[None, :] < sizes[:, None]
-    src = np.zeros((V, N, 2))
-    dst = np.zeros((V, N, 2))
+    mask = np.arange(int(sizes.max()))[None, :] < sizes[:, None]
+    src = np.zeros((*mask.shape, 2))
+    dst = np.zeros((*mask.shape, 2))
     src[mask] = np.concatenate([o[:, :2] for o in object_points])
     dst[mask] = np.concatenate(image_points)
-    w = mask[:, :, None].astype(np.float64)
-    normed, T, flat = [], [], np.zeros(V, dtype=bool)
-    for pts in (src, dst):  # similarity normalisation of each view's own points
-        centre = pts.sum(axis=1, keepdims=True) / sizes[:, None, None]
-        c = (pts - centre) * w
-        sv = np.linalg.svd(c, compute_uv=False)
-        flat |= sv[:, -1] <= _SUSPECT * np.where(sv[:, 0] == 0, 1.0, sv[:, 0])
-        mean_d = np.sqrt(np.sum(c * c, axis=-1)).sum(axis=1) / sizes
-        sc = np.where(mean_d > 0, np.sqrt(2.0) / np.where(mean_d > 0, mean_d, 1.0), 1.0)
-        normed.append(c * sc[:, None, None])
-        Tk = np.zeros((V, 3, 3))
-        Tk[:, 0, 0] = Tk[:, 1, 1] = sc
-        Tk[:, :2, 2] = -centre[:, 0, :] * sc[:, None]
-        Tk[:, 2, 2] = 1.0
-        T.append(Tk)
-    (sn, dn), (Ts, Td) = normed, T
-    x, y = sn[..., 0], sn[..., 1]
-    u, v = dn[..., 0], dn[..., 1]
-    one, zero = mask.astype(np.float64), np.zeros((V, N))
-    r1 = np.stack((zero, zero, zero, -x, -y, -one, v * x, v * y, v * one), axis=-1)
-    r2 = np.stack((x, y, one, zero, zero, zero, -u * x, -u * y, -u * one), axis=-1)
-    # full V when there are fewer equations than unknowns (4 points give 8 x 9)
-    _, sv, Vt = np.linalg.svd(np.concatenate((r1, r2), axis=-2), full_matrices=2 * N < 9)
-    H = np.linalg.inv(Td) @ Vt[:, -1, :].reshape(V, 3, 3) @ Ts
-    h22 = H[:, 2, 2]
-    fro = np.sqrt(np.sum(H * H, axis=(1, 2)))
-    H = H / np.where(np.abs(h22) <= 1e-12 * fro, fro, h22)[:, None, None]
-    alone = (
-        flat | (sizes == 4) | (sv[:, 7] <= _SUSPECT * sv[:, 0]) | ~np.all(np.isfinite(H), (1, 2))
-    )
-    for k in np.flatnonzero(alone):
-        H[k] = np.asarray(
-            estimate_homography(object_points[k][:, :2], image_points[k]), dtype=np.float64
-        )
-    return H
+    return _homographies_padded(src, dst, sizes)
 
 
 def _v(H: F64, i: int, j: int) -> F64:

@@ -11,6 +11,9 @@ from __future__ import annotations
 from itertools import combinations
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
+
 from imageform._backend import common_device, device_of, linalg, namespace
 from imageform._typing import Array, ArrayLike
 from imageform._validate import any_value
@@ -21,6 +24,8 @@ from imageform.geometry._normalize import similarity_normalization
 from imageform.geometry.homogeneous import are_collinear, from_homogeneous
 
 __all__ = ["apply_homography", "estimate_homography"]
+
+F64 = NDArray[np.float64]
 
 
 def _check_pairs(src: Array, dst: Array, n_min: int) -> None:
@@ -86,25 +91,73 @@ def estimate_homography(src: ArrayLike, dst: ArrayLike) -> Array:
     _check_not_collinear(d, "destination (dst)", xp)
     sn, Ts = similarity_normalization(s, xp)
     dn, Td = similarity_normalization(d, xp)
+    H, sv = _normalized_dlt(sn, Ts, dn, Td, xp.ones_like(sn[..., 0]), xp)
+    if any_value(sv[..., 7] <= 1e-12 * sv[..., 0], xp):
+        raise DegenerateConfigurationError(
+            "the correspondences do not determine a unique homography"
+        )
+    return H
+
+
+def _normalized_dlt(
+    sn: Array, Ts: Array, dn: Array, Td: Array, one: Array, xp: Any
+) -> tuple[Array, Array]:
+    """``H`` (..., 3, 3) of :func:`estimate_homography`, unchecked, and the DLT's singular values.
+
+    ``sn, dn`` are the normalised point sets and ``Ts, Td`` their similarities
+    (:func:`similarity_normalization`); ``one`` (..., N) is 1 for a point and 0 for the
+    padding of a batch, whose zero rows leave ``AᵀA``, and so the singular values and the null
+    vector, as they are.
+    """
     x, y = sn[..., 0], sn[..., 1]
     u, v = dn[..., 0], dn[..., 1]
-    one, zero = xp.ones_like(x), xp.zeros_like(x)
+    zero = xp.zeros_like(x)
     r1 = xp.stack((zero, zero, zero, -x, -y, -one, v * x, v * y, v), axis=-1)
     r2 = xp.stack((x, y, one, zero, zero, zero, -u * x, -u * y, -u), axis=-1)
     A = xp.concat((r1, r2), axis=-2)
     # full V when there are fewer equations than unknowns (N = 4 gives 8 x 9)
     _, sv, Vt = linalg(xp).svd(A, full_matrices=A.shape[-2] < A.shape[-1])
-    if any_value(sv[..., 7] <= 1e-12 * sv[..., 0], xp):
-        raise DegenerateConfigurationError(
-            "the correspondences do not determine a unique homography"
-        )
     Hn = xp.reshape(Vt[..., -1, :], (*Vt.shape[:-2], 3, 3))
     H = linalg(xp).inv(Td) @ Hn @ Ts
     h22 = H[..., 2, 2]
     fro = xp.sqrt(xp.sum(H * H, axis=(-2, -1)))
     tiny = xp.abs(h22) <= 1e-12 * fro
     scale = xp.where(tiny, fro, h22)
-    return H / scale[..., None, None]
+    return H / scale[..., None, None], sv
+
+
+#: A view whose points are this close to one line (smallest over largest singular value of
+#: the centred points), or whose DLT system is this close to rank 7, is solved on its own by
+#: :func:`estimate_homography` (which refuses it, or solves it, as alone).
+_SUSPECT = 1e-6
+
+
+def _homographies_padded(src: F64, dst: F64, sizes: NDArray[np.intp]) -> F64:
+    """``H_k`` (V, 3, 3) with ``dst_k ~ H_k src_k`` for views padded to ``(V, N, 2)``.
+
+    :func:`estimate_homography`'s normalised DLT of every view in one batch, each view
+    normalised over its first ``sizes[k]`` points (the rest is padding). The views must be
+    clean, finite and of at least 4 points each (the caller checks them). A view of 4 points,
+    or of nearly collinear points, or with a nearly rank-deficient system (:data:`_SUSPECT`),
+    or a non-finite result, is solved on its own by :func:`estimate_homography`, so that it is
+    refused with the same message as alone.
+    """
+    xp = namespace(src, dst)
+    mask = np.arange(src.shape[1])[None, :] < sizes[:, None]
+    sn, Ts = similarity_normalization(src, xp, mask=mask)
+    dn, Td = similarity_normalization(dst, xp, mask=mask)
+    # nearly collinear points (the padding's zero rows leave the singular values as they are)
+    ps = np.linalg.svd(np.stack((sn, dn)), compute_uv=False)
+    flat = np.any(ps[..., -1] <= _SUSPECT * np.where(ps[..., 0] == 0, 1.0, ps[..., 0]), axis=0)
+    Hb, sv = _normalized_dlt(sn, Ts, dn, Td, mask.astype(np.float64), xp)
+    H = np.asarray(Hb, dtype=np.float64)
+    alone = (
+        flat | (sizes == 4) | (sv[:, 7] <= _SUSPECT * sv[:, 0]) | ~np.all(np.isfinite(H), (1, 2))
+    )
+    for k in np.flatnonzero(alone):
+        n = int(sizes[k])
+        H[k] = np.asarray(estimate_homography(src[k, :n], dst[k, :n]), dtype=np.float64)
+    return H
 
 
 def apply_homography(H: ArrayLike, points: ArrayLike) -> Array:

@@ -42,7 +42,7 @@ import numpy as np
 from imageform._typing import ArrayLike, FloatArray
 from imageform._validate import as_bool, as_int, as_real, check_min_side, check_positive
 from imageform.errors import InvalidInputError
-from imageform.geometry._plumb_edges import grey
+from imageform.geometry._plumb_edges import grey, grey_levels
 
 __all__ = ["lsd_segments"]
 
@@ -81,16 +81,9 @@ def _stretch_low_contrast(image: ArrayLike) -> np.ndarray:
     if arr.ndim not in (2, 3) or arr.shape[0] < 1 or arr.shape[1] < 1:
         return arr
     step = max(1, math.ceil(math.sqrt(arr.shape[0] * arr.shape[1] / 16384.0)))
-    sample = np.asarray(arr[::step, ::step])
-    if sample.ndim == 3 and sample.shape[-1] == 1:
-        sample = sample[..., 0]
-    if sample.dtype in (np.uint8, np.uint16) or np.issubdtype(sample.dtype, np.floating):
-        # the luma LSD reads (Rec. 601), without its checks: this only decides
-        full = 255.0 if sample.dtype == np.uint8 else 65535.0 if sample.dtype == np.uint16 else 1.0
-        sample = sample.astype(np.float64) * (255.0 / full)
-        if sample.ndim == 3 and sample.shape[-1] == 3:
-            sample = sample[..., 0] * 0.299 + sample[..., 1] * 0.587 + sample[..., 2] * 0.114
-    if sample.ndim != 2 or sample.dtype != np.float64 or not np.isfinite(sample).all():
+    # the grey levels LSD reads, without its checks: this only decides
+    sample = grey_levels(arr[::step, ::step])
+    if sample is None or not np.isfinite(sample).all():
         return arr  # not an image the stretch is for (LSD's own checks say what it is)
     lo, hi = (float(x) for x in np.percentile(sample, _STRETCH_PERCENTILES))
     if not 0.0 < hi - lo < _STRETCH_RANGE:

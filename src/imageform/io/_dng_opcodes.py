@@ -371,10 +371,10 @@ def lossy_dng_curves(data: bytes | None) -> tuple[np.ndarray, int]:
     OpcodeList2 every plane gets :func:`_srgb_decoding_curve`, as it does here for a plane
     no polynomial sets (LibRaw leaves that one undefined). Returns the (4, 256) uint16
     curves and how many of the list's first MapPolynomials they used: those are applied
-    when decoding, and not again.
+    when decoding, and not again. The curves are computed once per OpcodeList2 and are
+    read-only (index with them; copy them to change them).
     """
-    curves, used = _lossy_dng_curves(bytes(data or b""))
-    return curves.copy(), used
+    return _lossy_dng_curves(bytes(data or b""))
 
 
 @functools.lru_cache(maxsize=16)

@@ -143,7 +143,11 @@ _SUBBAND_BAND = (0, 1, 2, 3, 1, 2, 3, 1, 2, 3)
 
 @functools.cache
 def _codebook() -> tuple[np.ndarray, np.ndarray]:
-    """Return codebook 17 as the kernels' tables: the 12-bit look-up table and the rest."""
+    """Return codebook 17 as the kernels' tables: the 12-bit look-up table and the rest.
+
+    Cached and, unlike imageform's other cached arrays, writable (never written): numba types
+    a read-only array apart, so read-only tables would compile the kernels a second time.
+    """
     from imageform._kernels.vc5 import FAST_BITS
 
     fast = np.zeros((1 << FAST_BITS, 3), np.int64)
@@ -165,7 +169,8 @@ def log_curve() -> np.ndarray:
 
     :math:`\lfloor\mathrm{float32}(65535\,(113^{i/4095} - 1)/112)\rfloor`, capped at 65535,
     computed as ``SetupDecoderLogCurve`` of GoPro's ``vc5_common/logcurve.c`` does (in double
-    precision, stored as a float, truncated).
+    precision, stored as a float, truncated). Cached and writable, as :func:`_codebook`'s
+    tables (a kernel's argument): never write to it.
     """
     i = np.arange(4096, dtype=np.float64)
     out = (65535.0 * (np.power(113.0, i / 4095.0) - 1.0) / 112.0).astype(np.float32)

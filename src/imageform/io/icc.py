@@ -265,7 +265,10 @@ def _references() -> tuple[tuple[str, NDArray[np.float64], NDArray[np.float64], 
         s = rgb_space(name)
         ramp = np.repeat(_LEVELS[:, None], 3, axis=1)[None]  # (1, 6, 3) greys
         linear = np.asarray(convert(ramp, name, f"linear_{name}"))[0, :, 0]
-        out.append((name, np.array(s.primaries_xy), np.array(s.white_xy), linear))
+        arrays = (np.array(s.primaries_xy), np.array(s.white_xy), linear)
+        for a in arrays:
+            a.setflags(write=False)  # computed once (functools.cache): read, never written
+        out.append((name, *arrays))
     return tuple(out)
 
 

@@ -1568,7 +1568,9 @@ def _transfer_table(transfer: str, gain: float = 1.0) -> np.ndarray:
     ``gain`` above 1: the table maps the unbrightened linear value v to the encoding of
     :func:`_highlight_shoulder` (``gain`` v): the brightening and its highlight roll-off in
     the table (``transfer`` ``"linear"``: no encoding). A copy of a table computed once per
-    ``(transfer, gain)`` (5 ms each: a third of developing a small DNG).
+    ``(transfer, gain)`` (5 ms each: a third of developing a small DNG), kept read-only: the
+    copy is writable because the render kernels take it (numba types a read-only array apart,
+    which :func:`~imageform._kernels.raw_develop.develop_rows`'s one signature refuses).
     """
     return _transfer_table_cached(transfer, float(gain)).copy()
 
@@ -1582,9 +1584,10 @@ def _transfer_table_cached(transfer: str, gain: float) -> np.ndarray:
     v = u * u
     if gain > 1.0:
         v = _highlight_shoulder(gain * v, gain)
-    if transfer == "linear":
-        return v.astype(np.float32)
-    return np.asarray(encode(v, transfer), np.float64).astype(np.float32)
+    encoded = v if transfer == "linear" else np.asarray(encode(v, transfer), np.float64)
+    table = encoded.astype(np.float32)
+    table.setflags(write=False)  # computed once (lru_cache): read, never written
+    return table
 
 
 #: Where the highlight roll-off starts, in the output's linear values (below it the
@@ -1843,17 +1846,18 @@ def develop(
         cam = np.asarray(_demosaic(balanced, raw.cfa_pattern, method, allow_odd=True))
         del balanced
         cam = np.ascontiguousarray(cam, dtype=np.float32)
-    # 4. camera RGB -> XYZ, white-balanced white on D65's (LibRaw's cam_xyz_coeff)
+    # 4. camera RGB -> XYZ, white-balanced white on D65's (LibRaw's cam_xyz_coeff); the
+    # cached matrices are read-only: the Development gets its own (a caller may change them)
     white, srgb_to_xyz, cat, to_rgb = _space_matrices(key)
     if raw.xyz_to_camera is not None:
         C = np.asarray(raw.xyz_to_camera, np.float64)
         cam_to_xyz = np.linalg.inv(C) @ np.diag(C @ white)
     elif raw.monochrome:  # grey in linear sRGB: grey in any output space
-        cam_to_xyz = srgb_to_xyz
+        cam_to_xyz = srgb_to_xyz.copy()
     elif np.any(np.asarray(raw.camera_to_srgb)):  # LibRaw's camera -> sRGB only
         cam_to_xyz = srgb_to_xyz @ np.asarray(raw.camera_to_srgb, np.float64)
     else:  # no colour matrix, and LibRaw knows none for this camera
-        cam_to_xyz = srgb_to_xyz
+        cam_to_xyz = srgb_to_xyz.copy()
         notes.append(
             "note: the file has no colour matrix and LibRaw knows none for this camera: "
             "camera RGB developed as if it were linear sRGB"
@@ -1867,7 +1871,7 @@ def develop(
         render=m,
         table=None if encoding == "linear" else _transfer_table(encoding),
         camera_to_xyz=cam_to_xyz,
-        adaptation=cat,
+        adaptation=cat.copy(),
         space=key,
         transfer=encoding,
         demosaic=method,
@@ -1910,17 +1914,12 @@ def develop(
     return dev
 
 
+@functools.cache
 def _space_matrices(key: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Return D65's white (XYZ), sRGB to XYZ, the adaptation to ``key``'s white, XYZ to ``key``.
 
-    Copies of what :func:`_space_matrices_cached` computed once per space.
+    Computed once per space, read-only.
     """
-    white, srgb_to_xyz, cat, to_rgb = _space_matrices_cached(key)
-    return white.copy(), srgb_to_xyz.copy(), cat.copy(), to_rgb.copy()
-
-
-@functools.cache
-def _space_matrices_cached(key: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     from imageform.color import (
         RGB_SPACES,
         chromatic_adaptation_matrix,
@@ -1939,7 +1938,10 @@ def _space_matrices_cached(key: str) -> tuple[np.ndarray, np.ndarray, np.ndarray
     else:
         cat = np.asarray(chromatic_adaptation_matrix(white, dst_white, "bradford"), np.float64)
     to_rgb = np.linalg.inv(np.asarray(rgb_to_xyz_matrix(key), np.float64))
-    return white, srgb_to_xyz, cat, to_rgb
+    out = (white, srgb_to_xyz, cat, to_rgb)
+    for m in out:
+        m.setflags(write=False)  # computed once (functools.cache): read, never written
+    return out
 
 
 def _not_raw(p: Path) -> str | None:
