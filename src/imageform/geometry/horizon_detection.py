@@ -10,7 +10,10 @@ choose?") compare with region criteria such as Ettinger et al. (2003)'s split of
 ground colour statistics; a straight edge is what makes the horizon level-straight, and the
 acceptance tests below are what make "not found" the answer elsewhere:
 
-1. The photograph is reduced to at most ``_WORK`` pixels on its long side; colour gradients
+1. The photograph is reduced to at most ``_WORK`` pixels on its long side; a low-contrast
+   one (haze, fog, a dim exposure: its grey levels span less than ``_STRETCH_RANGE`` between
+   their 1st and 99th percentiles) is stretched to the contrast the thresholds below were
+   set on (:func:`_stretch_low_contrast`), any other is read as it is; colour gradients
    (Gaussian σ = 1 px, the Di Zenzo structure tensor's strongest direction, so that a
    boundary of hue at equal brightness counts) above a threshold set from the image's own
    gradient distribution are its edge points.
@@ -136,6 +139,14 @@ _VERT_WAVES = 0.25
 #: that above it): the sky's edge, not a surf line.
 _WAVE_LINES = 8
 _WAVE_COVER = 0.15
+#: A low-contrast photograph (haze, fog, dim): a grey level spanning less than this between
+#: these percentiles is stretched to the full range (:func:`_stretch_low_contrast`; 64 of
+#: 255, the vanishing points' stretch, ``imageform.geometry.lsd``).
+_STRETCH_PERCENTILES = (1.0, 99.0)
+_STRETCH_RANGE = 0.25
+#: ... to span this (the median span of the tuning photographs, 0.81, whose contrast the
+#: thresholds above were set on): ``[lo, hi]`` to ``[0.1, 0.9]``.
+_STRETCH_TO = 0.8
 
 
 @dataclass(frozen=True)
@@ -194,7 +205,26 @@ def _prepare(image: ArrayLike) -> tuple[np.ndarray, float]:
         sigma = 0.5 / scale
         a = ndimage.gaussian_filter(a, (sigma, sigma, 0), mode="nearest")
         a = ndimage.zoom(a, (scale, scale, 1), order=1, mode="nearest", grid_mode=True)
-    return a, scale
+    return _stretch_low_contrast(a), scale
+
+
+def _stretch_low_contrast(a: np.ndarray) -> np.ndarray:
+    """Return a low-contrast working image stretched to the full range; others as they are.
+
+    The acceptance thresholds (``_SAME``, ``_TEX_ABOVE``, ``_SMOOTH``, the edge floor) are in
+    image values, set on photographs of normal contrast; haze, fog, a dim exposure or a
+    washed-out print shrink every colour difference with the scene's range. Where the grey
+    level (the channels' mean) spans less than ``_STRETCH_RANGE`` between its
+    ``_STRETCH_PERCENTILES`` ``lo`` and ``hi``, the image is mapped affinely,
+    ``(a - lo) / (hi - lo)`` (every channel, not clipped), as
+    :func:`imageform.geometry.lsd._stretch_low_contrast` does for the vanishing points;
+    otherwise (normal contrast, or flat) ``a`` itself is returned and the answer is
+    bit-identical.
+    """
+    lo, hi = (float(x) for x in np.percentile(a.mean(-1), _STRETCH_PERCENTILES))
+    if not 0.0 < hi - lo < _STRETCH_RANGE:
+        return a
+    return 0.5 * (1.0 - _STRETCH_TO) + (a - lo) * (_STRETCH_TO / (hi - lo))
 
 
 def _gradients(a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
