@@ -316,8 +316,21 @@ def test_the_stretch_leaves_normal_contrast_alone() -> None:
     from imageform.geometry.horizon_detection import _stretch_low_contrast
 
     img, _ = _seascape(0.0)
-    assert _stretch_low_contrast(img) is img  # not stretched: bit-identical answers
+    out, gain = _stretch_low_contrast(img)
+    assert out is img and gain == 1.0  # not stretched: bit-identical answers
     low = 0.3 + 0.1 * img
-    out = _stretch_low_contrast(low)
+    out, gain = _stretch_low_contrast(low)
     lo, hi = np.percentile(out.mean(-1), (1.0, 99.0))
     assert (lo, hi) == pytest.approx((0.1, 0.9), abs=1e-9)
+    assert gain == pytest.approx(
+        8.0 / (np.percentile(img.mean(-1), 99) - np.percentile(img.mean(-1), 1))
+    )
+
+
+@pytest.mark.parametrize("levels", [1, 3, 8])
+def test_a_quantised_smooth_sky_is_not_a_horizon(levels: int) -> None:
+    # a smooth gradient over a few 8-bit codes: stretched, its contours between codes are
+    # straight, level and sharp; the edge floor stays the input's (one code is no edge)
+    v = np.arange(240.0)[:, None] * np.ones((1, 320))
+    res = detect_horizon(np.round(120 + levels * v / 239).astype(np.uint8))
+    assert not res.found and res.reason
