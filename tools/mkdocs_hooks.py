@@ -101,6 +101,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "illuminant-real": "benchmarks/check_illuminant_real.py",
     "gpr": "benchmarks/check_gpr.py",
     "horizon-natural": "benchmarks/check_horizon_natural.py",
+    "horizon-stress": "benchmarks/check_horizon_stress.py",
     "local-homography": "benchmarks/check_local_homography.py",
     "lsd": "benchmarks/bench_lsd.py",
     "locus": "benchmarks/bench_locus.py",

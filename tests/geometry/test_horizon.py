@@ -279,3 +279,58 @@ def test_uint8_and_float_agree() -> None:
     a, b = detect_horizon(img), detect_horizon(as8)
     assert a.found and b.found
     np.testing.assert_allclose(a.rows, b.rows, atol=0.5)
+
+
+@pytest.mark.parametrize("as_uint8", [False, True])
+def test_a_hazy_low_contrast_horizon_is_found(as_uint8: bool) -> None:
+    # the seascape washed out towards a pale haze, a 40th of its contrast left (the sea's step
+    # under the horizon is 0.02, within _SAME: before the stretch the sky's color was taken
+    # to lie on both sides of it and nothing was found); 8-bit keeps 8 grey levels of it
+    img, rows = _seascape(4.0)
+    hazy = 0.8 + (img - 0.8) / 40.0
+    if as_uint8:
+        hazy = np.round(hazy * 255).astype(np.uint8)
+    res = detect_horizon(hazy)
+    assert res.found, res.reason
+    np.testing.assert_allclose(res.rows, rows, atol=1.0)
+    assert math.degrees(res.roll) == pytest.approx(4.0, abs=0.3)
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: 0.5 + np.random.default_rng(1).normal(0.0, 0.01, (240, 320)),
+        lambda: 0.4 + 0.05 * _facade(),
+        lambda: 0.4 + 0.05 * _mountains(),
+    ],
+    ids=["flat-noise", "facade", "mountains"],
+)
+def test_low_contrast_scenes_without_a_horizon_are_not_found(make: object) -> None:
+    # stretched (their grey levels span less than a quarter of the range) and still refused;
+    # the facade at a 20th of its contrast was a false horizon before the stretch
+    res = detect_horizon(make())  # type: ignore[operator]
+    assert not res.found and res.reason
+
+
+def test_the_stretch_leaves_normal_contrast_alone() -> None:
+    from imageform.geometry.horizon_detection import _stretch_low_contrast
+
+    img, _ = _seascape(0.0)
+    out, gain = _stretch_low_contrast(img)
+    assert out is img and gain == 1.0  # not stretched: bit-identical answers
+    low = 0.3 + 0.1 * img
+    out, gain = _stretch_low_contrast(low)
+    lo, hi = np.percentile(out.mean(-1), (1.0, 99.0))
+    assert (lo, hi) == pytest.approx((0.1, 0.9), abs=1e-9)
+    assert gain == pytest.approx(
+        8.0 / (np.percentile(img.mean(-1), 99) - np.percentile(img.mean(-1), 1))
+    )
+
+
+@pytest.mark.parametrize("levels", [1, 3, 8])
+def test_a_quantised_smooth_sky_is_not_a_horizon(levels: int) -> None:
+    # a smooth gradient over a few 8-bit codes: stretched, its contours between codes are
+    # straight, level and sharp; the edge floor stays the input's (one code is no edge)
+    v = np.arange(240.0)[:, None] * np.ones((1, 320))
+    res = detect_horizon(np.round(120 + levels * v / 239).astype(np.uint8))
+    assert not res.found and res.reason

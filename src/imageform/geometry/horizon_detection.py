@@ -10,7 +10,10 @@ choose?") compare with region criteria such as Ettinger et al. (2003)'s split of
 ground colour statistics; a straight edge is what makes the horizon level-straight, and the
 acceptance tests below are what make "not found" the answer elsewhere:
 
-1. The photograph is reduced to at most ``_WORK`` pixels on its long side; colour gradients
+1. The photograph is reduced to at most ``_WORK`` pixels on its long side; a low-contrast
+   one (haze, fog, a dim exposure: its grey levels span less than ``_STRETCH_RANGE`` between
+   their 1st and 99th percentiles) is stretched to the contrast the thresholds below were
+   set on (:func:`_stretch_low_contrast`), any other is read as it is; colour gradients
    (Gaussian σ = 1 px, the Di Zenzo structure tensor's strongest direction, so that a
    boundary of hue at equal brightness counts) above a threshold set from the image's own
    gradient distribution are its edge points.
@@ -136,6 +139,18 @@ _VERT_WAVES = 0.25
 #: that above it): the sky's edge, not a surf line.
 _WAVE_LINES = 8
 _WAVE_COVER = 0.15
+#: A low-contrast photograph (haze, fog, dim): a grey level spanning less than this between
+#: these percentiles is stretched to the full range (:func:`_stretch_low_contrast`; 64 of
+#: 255, the vanishing points' stretch, ``imageform.geometry.lsd``).
+_STRETCH_PERCENTILES = (1.0, 99.0)
+_STRETCH_RANGE = 0.25
+#: ... to span this (the median span of the tuning photographs, 0.81, whose contrast the
+#: thresholds above were set on): ``[lo, hi]`` to ``[0.1, 0.9]``.
+_STRETCH_TO = 0.8
+#: Edge points: an edge strength above half the image's 75th percentile and above this, in
+#: the input's values (image values per px: the Gaussian derivative's peak over a step of
+#: one 8-bit code, 1/255, is 0.0016), times the stretch's gain.
+_EDGE_FLOOR = 0.004
 
 
 @dataclass(frozen=True)
@@ -173,8 +188,8 @@ class HorizonResult:
     reason: str = ""
 
 
-def _prepare(image: ArrayLike) -> tuple[np.ndarray, float]:
-    """Return the working image ``(h, w, c)`` float64 and its scale from the input."""
+def _prepare(image: ArrayLike) -> tuple[np.ndarray, float, float]:
+    """Return the working image ``(h, w, c)`` float64, its scale and its contrast gain."""
     from scipy import ndimage
 
     arr = np.asarray(as_image(image, channels=None))
@@ -194,7 +209,30 @@ def _prepare(image: ArrayLike) -> tuple[np.ndarray, float]:
         sigma = 0.5 / scale
         a = ndimage.gaussian_filter(a, (sigma, sigma, 0), mode="nearest")
         a = ndimage.zoom(a, (scale, scale, 1), order=1, mode="nearest", grid_mode=True)
-    return a, scale
+    stretched, gain = _stretch_low_contrast(a)
+    return stretched, scale, gain
+
+
+def _stretch_low_contrast(a: np.ndarray) -> tuple[np.ndarray, float]:
+    """Return a low-contrast working image stretched to the full range; others as they are.
+
+    The acceptance thresholds (``_SAME``, ``_TEX_ABOVE``, ``_SMOOTH``, the edge floor) are in
+    image values, set on photographs of normal contrast; haze, fog, a dim exposure or a
+    washed-out print shrink every colour difference with the scene's range. Where the grey
+    level (the channels' mean) spans less than ``_STRETCH_RANGE`` between its
+    ``_STRETCH_PERCENTILES`` ``lo`` and ``hi``, the image is mapped affinely,
+    ``(a - lo) / (hi - lo)`` (every channel, not clipped), as
+    :func:`imageform.geometry.lsd._stretch_low_contrast` does for the vanishing points;
+    otherwise (normal contrast, or flat) ``a`` itself is returned and the answer is
+    bit-identical. Returns the image and the gain, ``_STRETCH_TO / (hi - lo)`` or 1: the
+    edge floor (``_EDGE_FLOOR``) is the input's, multiplied by it, so that a step of one
+    8-bit code (a contour of a smooth sky's quantised gradient) does not become an edge.
+    """
+    lo, hi = (float(x) for x in np.percentile(a.mean(-1), _STRETCH_PERCENTILES))
+    if not 0.0 < hi - lo < _STRETCH_RANGE:
+        return a, 1.0
+    gain = _STRETCH_TO / (hi - lo)
+    return 0.5 * (1.0 - _STRETCH_TO) + (a - lo) * gain, gain
 
 
 def _gradients(a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -609,10 +647,10 @@ def _candidates(image: ArrayLike, max_roll: float) -> tuple[list[_Candidate], in
     """Return the candidate lines, the long segments' count and the working scale."""
     from imageform.geometry.line_segments import detect_line_segments
 
-    a, scale = _prepare(image)
+    a, scale, gain = _prepare(image)
     grads = _gradients(a)
     mag = grads[0]
-    thr = max(float(np.percentile(mag, 75)) * 0.5, 0.004)
+    thr = max(float(np.percentile(mag, 75)) * 0.5, _EDGE_FLOOR * gain)
     cands = _hough(mag, grads[1], grads[2], thr, max_roll)
     segs = detect_line_segments(a.mean(-1))
     seg_d = np.asarray(segs.endpoints[:, 1] - segs.endpoints[:, 0], dtype=np.float64)
