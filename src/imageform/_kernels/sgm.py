@@ -539,7 +539,7 @@ def _select_row(S, out, min_d, keep, lr_check, claim, claim_cost, equiangular): 
         # the least sum more than 1 away from b: two plain loops (vector lanes; a test of
         # |k - b| in one loop ran scalar, half of the selection's time)
         sec = np.uint16(65535)
-        for k in range(max(b - 1, 0)):
+        for k in range(b - 1 if b > 1 else 0):
             sec = min(sec, row[k])
         sec_hi = np.uint16(65535)
         for k in range(min(b + 2, n), n):
