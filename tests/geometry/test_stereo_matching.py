@@ -199,6 +199,36 @@ def test_left_right_check_is_opencvs() -> None:
         np.testing.assert_allclose(d[0, 2:], [np.nan, 1 - 19 / 40, 2, 2], rtol=1e-6)
 
 
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 7])
+def test_uniqueness_skips_the_winners_neighbours_at_every_winner(n) -> None:  # type: ignore[no-untyped-def]
+    """The second best is the least sum more than 1 away from the winner, at the ends too.
+
+    One column per (winner b, rival r): sum 100 at b, 104 at r, 200 elsewhere; with
+    uniqueness 0.1 the rival makes the winner not unique exactly where ``|r - b| > 1``
+    (104 * 0.9 < 100), as OpenCV's ``StereoSGBM`` (the kernel splits that search in two
+    loops, below ``b - 1`` and above ``b + 1``).
+    """
+    cases = [(b, r) for b in range(n) for r in range(n) if r != b]
+    if not cases:  # one disparity: every winner unique
+        cases = [(0, 0)]
+    w = len(cases) + n - 1  # the first n - 1 columns: the band outside the right image
+    total = np.full((1, w, n), 200, dtype=np.uint16)
+    for i, (b, r) in enumerate(cases):
+        total[0, n - 1 + i, r] = 104
+        total[0, n - 1 + i, b] = 100
+    got = sgm.select(total, 0, 0.1, -1.0)
+    np.testing.assert_array_equal(got, twin.select(total, 0, 0.1, -1.0))
+    want = [np.nan] * (n - 1) + [np.nan if abs(r - b) > 1 else float(b) for b, r in cases]
+    np.testing.assert_array_equal(np.round(got[0]), want)  # sub-pixel: within 0.5 of b
+    fused = np.empty_like(got)
+    srow = total[0].copy()
+    claim, claim_cost = np.empty(w, np.int64), np.empty(w, np.int64)
+    fused[0] = np.nan
+    sgm._select_row(srow, fused[0], 0, 0.9, -1.0, claim, claim_cost, False)
+    np.testing.assert_array_equal(fused, got)
+    np.testing.assert_array_equal(srow, total[0])  # the sums left as they were
+
+
 @pytest.mark.parametrize("x0", [-0.4, -0.25, -0.1, 0.0, 0.15, 0.3, 0.45])
 def test_equiangular_fit_is_exact_on_a_v_and_the_parabola_is_not(x0) -> None:  # type: ignore[no-untyped-def]
     """Sums that grow linearly away from a sub-pixel ``x0`` (Shimizu & Okutomi's V): the

@@ -536,10 +536,15 @@ def _select_row(S, out, min_d, keep, lr_check, claim, claim_cost, equiangular): 
             key = min(key, np.uint32((np.uint32(row[k]) << np.uint32(12)) | np.uint32(k)))
         b = np.int64(key & np.uint32(0xFFF))
         bc = row[b]
-        sec = np.uint16(65535)  # the least sum more than 1 away from b
-        for k in range(n):
-            v = row[k] if abs(k - b) > 1 else np.uint16(65535)
-            sec = min(sec, v)
+        # the least sum more than 1 away from b: two plain loops (vector lanes; a test of
+        # |k - b| in one loop ran scalar, half of the selection's time)
+        sec = np.uint16(65535)
+        for k in range(b - 1 if b > 1 else 0):
+            sec = min(sec, row[k])
+        sec_hi = np.uint16(65535)
+        for k in range(min(b + 2, n), n):
+            sec_hi = min(sec_hi, row[k])
+        sec = min(sec, sec_hi)
         if (b > 1 or b + 2 < n) and np.float64(sec) * keep < np.float64(bc):
             continue
         xr = x - min_d - b
