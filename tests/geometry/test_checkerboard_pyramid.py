@@ -30,6 +30,26 @@ def test_block_mean_values_and_centres() -> None:
     np.testing.assert_array_equal(three, [[8.0, 11.0]])  # the 3 x 3 blocks' centre pixels
 
 
+@pytest.mark.parametrize("masked", [False, True])
+def test_half_window_sums_are_the_whole_windows_but_for_rounding(masked: bool) -> None:
+    """``half=True`` (each pair ``(d, -d)`` summed once, the normal equations halved) takes the
+    same steps as the whole window's sums, to rounding (1e-9 px), masked or not."""
+    from imageform._kernels.checkerboard_symmetric import refine_symmetric_numba
+
+    H = homography(24.0, (80.0, 70.0), 0.2, 0.02, 5, 4)
+    img = render_board(5, 4, H, (140, 160), blur=1.5, noise=0.01, seed=2).astype(np.float32)
+    truth = board_corners(5, 4, H)
+    start = truth + np.random.default_rng(1).uniform(-1.0, 1.0, truth.shape)
+    mask = None
+    if masked:
+        mask = np.random.default_rng(2).uniform(size=(len(start), 19, 19)) > 0.2
+    whole, s_whole = refine_symmetric_numba(img, start, 9, 30, 1e-3, mask)
+    half, s_half = refine_symmetric_numba(img, start, 9, 30, 1e-3, mask, half=True)
+    assert s_whole.tolist() == s_half.tolist() and not np.any(s_half)
+    np.testing.assert_allclose(half, whole, atol=1e-9)
+    assert np.hypot(*(half - truth).T).max() < 0.05
+
+
 def _both(
     u8: np.ndarray, monkeypatch: pytest.MonkeyPatch, pattern: tuple[int, int] = (9, 6)
 ) -> tuple[np.ndarray, np.ndarray]:

@@ -702,7 +702,11 @@ def find_checkerboard(
         corner's window (a wide-angle lens, a fisheye, a steep view: the grid's map around
         the corner departs from an affine one by more than 1 px on the window's rim), the
         corner is refined once more with the window's pairs taken through that map
-        (benchmarks/results/local-homography-2026-11-30a.md). ``"gradient"``:
+        (benchmarks/results/local-homography-2026-11-30a.md). Windows of radius 40 px and
+        more (squares of 50 px and more) run both of those steps on block means of 2 x 2
+        pixels or more, then one step at full resolution: the corners within about 0.02 px
+        of the full-resolution steps' (benchmarks/results/checkerboard-pyramid-2026-12-02a.md).
+        ``"gradient"``:
         :func:`refine_corners` only (OpenCV's ``cornerSubPix``, imageform's only refinement
         before ``method`` existed; use it to reproduce OpenCV's corners). On eleven sets of
         real calibration photographs the symmetric corners fit a camera model better than the
