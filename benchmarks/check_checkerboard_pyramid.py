@@ -39,7 +39,7 @@ def worker(npz: str) -> None:
     from imageform.geometry import find_checkerboard
 
     data = np.load(npz)
-    out = []
+    out: list[list[float] | None] = []
     for k in range(int(data["n"])):
         det = find_checkerboard(data[f"img{k}"], (9, 6))
         if not det.found:
@@ -62,6 +62,7 @@ def real_worker(folder: str, size: str, npz: str) -> None:
     corners = []
     for p in sorted(Path(folder).glob("left*.jpg")):
         img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
+        assert img is not None, p
         if img.shape != (h, w):
             img = cv2.resize(img, (w, h), interpolation=cv2.INTER_LINEAR)
         det = find_checkerboard(img, (9, 6))
@@ -124,7 +125,8 @@ def main() -> None:
                 npz = f"{tmp}/views.npz"
                 arrays = {f"img{k}": v[0] for k, v in enumerate(views)}
                 arrays.update({f"truth{k}": v[1] for k, v in enumerate(views)})
-                np.savez(npz, n=len(views), **arrays)
+                arrays["n"] = np.array(len(views))
+                np.savez(npz, **arrays)  # type: ignore[arg-type]
                 for name, src in trees.items():
                     env = dict(os.environ, PYTHONPATH=src)
                     cmd = [sys.executable, __file__, "--before", src, "--worker", npz]
