@@ -13,7 +13,8 @@ Each configuration runs in its own process (the two trees cannot share one); the
 are interleaved over ``--rounds`` rounds; each reports the median of ``--repeat`` timed passes
 over the views (after one untimed pass: compilation or cache loading), and the table gives the
 median over rounds, in ms per view. The corners of every configuration are compared with this
-tree's on one thread: the largest difference (px) must be 0 (the kernels are bit-identical).
+tree's on one thread: the largest difference (px), 0 where both refine the same way (the
+kernels are the same on any number of threads).
 
 Run from the project root::
 

@@ -188,13 +188,17 @@ def real_set(cv2: Any, name: str, pattern: str, board: tuple[int, int],
 
 
 def _render(rng: np.random.Generator, blur: float, k1: float, noise: float,
-            jpeg: int) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """A rendered 640 x 480 view of a 9 x 6 board (uint8) and its true inner corners."""
+            jpeg: int, upscale: int = 1) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """A rendered 640 x 480 view of a 9 x 6 board (uint8) and its true inner corners.
+
+    ``upscale``: the same view at ``upscale`` times the size (the blur ``upscale`` times as
+    wide, ``6 // upscale`` jittered samples a side per pixel), for large views."""
     import cv2
     from scipy.ndimage import gaussian_filter
     from scipy.spatial.transform import Rotation
 
-    w, h, f = 640, 480, 520.0
+    w, h, f = 640 * upscale, 480 * upscale, 520.0 * upscale
+    blur = blur * upscale
     cols, rows = 9, 6
     rot = Rotation.from_rotvec(rng.uniform(-1, 1, 3) * np.radians([45, 45, 20])).as_matrix()
     board_c = np.array([(cols + 1) / 2, (rows + 1) / 2, 0.0])
@@ -210,7 +214,7 @@ def _render(rng: np.random.Generator, blur: float, k1: float, noise: float,
         p = (s[..., None] * d - t) @ rot + board_c
         return p[..., 0], p[..., 1]
 
-    ss = 6
+    ss = max(1, 6 // upscale)
     img = np.zeros((h, w))
     vv, uu = np.mgrid[0:h, 0:w].astype(np.float64)
     for a in range(ss):

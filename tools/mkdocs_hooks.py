@@ -72,6 +72,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "checkerboard-large": "benchmarks/check_checkerboard_large.py",
     "checkerboard-real": "benchmarks/check_checkerboard_real.py",
     "checkerboard-refine": "benchmarks/bench_checkerboard_refine.py",
+    "checkerboard-pyramid": "benchmarks/check_checkerboard_pyramid.py",
     "checkerboard-auto": "benchmarks/check_checkerboard_auto.py",
     "chunked": "benchmarks/bench_chunked.py",
     "chunked-strips": "benchmarks/bench_chunked.py",

@@ -361,6 +361,10 @@ VALID: dict[str, C | Skip] = {
     ),
     "imageform.geometry.checkerboard_points": call(pattern_size=(4, 3)),
     "imageform.geometry.checkerboard_subpix.as_gray": call(image=V("rgb_big")),
+    "imageform.geometry.checkerboard_subpix.block_mean": Skip(
+        "an internal step of find_checkerboard's symmetric method on large windows, on its "
+        "clean grey image (fuzzed through find_checkerboard)"
+    ),
     "imageform.geometry.checkerboard_subpix.gray_codes": call(image=V("rgb_big")),
     "imageform.geometry.checkerboard_subpix.gray_from_codes": Skip(
         "an internal step of the checkerboard detector on gray_codes' output (fuzzed through "
@@ -383,6 +387,10 @@ VALID: dict[str, C | Skip] = {
     "imageform.geometry.checkerboard_subpix.refine_symmetric_inside": Skip(
         "an internal step of find_checkerboard's symmetric method on clean input (fuzzed "
         "through find_checkerboard)"
+    ),
+    "imageform.geometry.checkerboard_subpix.refine_symmetric_pyramid": Skip(
+        "an internal step of find_checkerboard's symmetric method on large windows, on clean "
+        "input (fuzzed through find_checkerboard)"
     ),
     "imageform.geometry.checkerboard_subpix.room_to_border": Skip(
         "an internal step on clean corner arrays of find_checkerboard (fuzzed through it)"

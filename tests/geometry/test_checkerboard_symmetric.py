@@ -343,7 +343,7 @@ def test_kernel_on_threads_is_the_former_serial_kernel_bit_for_bit(
         out = pts.copy()
         st = np.ones(len(pts), dtype=np.int64)
         run_tasks(ks._refine_symmetric, len(pts), i32, i64, image == "float32", out, h, w, inv,
-                  pm, masked, 30, 1e-3, out, st, threads=threads)  # fmt: skip
+                  pm, masked, 30, 1e-3, out, st, False, threads=threads)  # fmt: skip
         outs.append((out, st))
     for out, st in outs:
         assert st.tolist() == want_st.tolist() and np.array_equal(out, want, equal_nan=True)

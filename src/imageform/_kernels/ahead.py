@@ -102,7 +102,7 @@ _BOARD_CHILD = (
         "checkerboard_symmetric",
         "_refine_symmetric",
         f"(int64, int64, float32[:, ::1], {_A2}, boolean, {_A2}, int64, {_A2}, {_A2}, {_A3}, "
-        f"boolean, int64, float64, {_A2}, {_I1})",
+        f"boolean, int64, float64, {_A2}, {_I1}, boolean)",
     ),
     Entry(
         "checkerboard_local",

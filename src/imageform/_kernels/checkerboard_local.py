@@ -152,6 +152,60 @@ def _sample(
     return val, gx, gy
 
 
+@njit(fastmath=False)
+def _sample_inside(
+    image32: NDArray[np.float32],
+    image64: NDArray[np.float64],
+    is32: bool,
+    x: float,
+    y: float,
+) -> tuple[float, float, float]:  # pragma: no cover - numba-compiled
+    """:func:`_sample` at ``1 <= x < width - 2``, ``1 <= y < height - 2``: no clamping needed.
+
+    The same arithmetic as :func:`_sample` (whose clamps change nothing there), the same bits.
+    """
+    fx = np.floor(x)
+    fy = np.floor(y)
+    ax = x - fx
+    ay = y - fy
+    xa = int(fx)
+    ya = int(fy)
+    if is32:
+        v10 = np.float64(image32[ya, xa - 1])
+        v11 = np.float64(image32[ya, xa])
+        v12 = np.float64(image32[ya, xa + 1])
+        v13 = np.float64(image32[ya, xa + 2])
+        v20 = np.float64(image32[ya + 1, xa - 1])
+        v21 = np.float64(image32[ya + 1, xa])
+        v22 = np.float64(image32[ya + 1, xa + 1])
+        v23 = np.float64(image32[ya + 1, xa + 2])
+        v01 = np.float64(image32[ya - 1, xa])
+        v02 = np.float64(image32[ya - 1, xa + 1])
+        v31 = np.float64(image32[ya + 2, xa])
+        v32 = np.float64(image32[ya + 2, xa + 1])
+    else:
+        v10 = image64[ya, xa - 1]
+        v11 = image64[ya, xa]
+        v12 = image64[ya, xa + 1]
+        v13 = image64[ya, xa + 2]
+        v20 = image64[ya + 1, xa - 1]
+        v21 = image64[ya + 1, xa]
+        v22 = image64[ya + 1, xa + 1]
+        v23 = image64[ya + 1, xa + 2]
+        v01 = image64[ya - 1, xa]
+        v02 = image64[ya - 1, xa + 1]
+        v31 = image64[ya + 2, xa]
+        v32 = image64[ya + 2, xa + 1]
+    b00 = (1.0 - ay) * (1.0 - ax)
+    b01 = (1.0 - ay) * ax
+    b10 = ay * (1.0 - ax)
+    b11 = ay * ax
+    val = b00 * v11 + b01 * v12 + b10 * v21 + b11 * v22
+    gx = 0.5 * (b00 * (v12 - v10) + b01 * (v13 - v11) + b10 * (v22 - v20) + b11 * (v23 - v21))
+    gy = 0.5 * (b00 * (v21 - v01) + b01 * (v22 - v02) + b10 * (v31 - v11) + b11 * (v32 - v12))
+    return val, gx, gy
+
+
 @njit(fastmath=False, nogil=True)
 def _refine_local(
     t0: int,
@@ -175,8 +229,10 @@ def _refine_local(
     A task of :func:`imageform._kernels.jit.run_tasks` (each corner's arithmetic its own: the
     same corners on any number of threads). ``image32`` if ``is32``, else ``image64``.
     ``linv`` (N, 4) and ``coef`` (N, 18): the maps flattened (row-major). The sums run over
-    the first half of the window in raster order (``-d`` gives the same terms). Writes
-    ``out[k]`` (``corners`` may be ``out``) and ``status[k]`` (1 on entry).
+    the first half of the window in raster order (``-d`` gives the same terms). A step whose
+    samples all lie at least a pixel inside the image reads them without clamping
+    (:func:`_sample_inside`, the same bits). Writes ``out[k]`` (``corners`` may be ``out``)
+    and ``status[k]`` (1 on entry).
     """
     height, width = image32.shape if is32 else image64.shape
     m = 2 * h + 1
@@ -238,6 +294,18 @@ def _refine_local(
         if not (dd > SINGULAR * (d11 + d22) * (d11 + d22)):
             status[k] = 2
             continue
+        # the offsets' extent (weighted ones), for the steps that need no clamping
+        lo_u = np.inf
+        hi_u = -np.inf
+        lo_v = np.inf
+        hi_v = -np.inf
+        for i in range(h + 1):
+            for j in range(m if i < h else h):
+                if wk[i, j] != 0.0:
+                    lo_u = min(lo_u, plus[i, j, 0], minus[i, j, 0])
+                    hi_u = max(hi_u, plus[i, j, 0], minus[i, j, 0])
+                    lo_v = min(lo_v, plus[i, j, 1], minus[i, j, 1])
+                    hi_v = max(hi_v, plus[i, j, 1], minus[i, j, 1])
         i11 = d22 / (4.0 * dd)
         i12 = -d12 / (4.0 * dd)
         i22 = d11 / (4.0 * dd)
@@ -255,17 +323,32 @@ def _refine_local(
             g2 = 0.0
             e1 = 0.0
             e2 = 0.0
+            # every sample's 4 x 4 neighbourhood inside (NaN bounds fail the test)
+            inside = (
+                cx + lo_u - 1.0 >= 1.0
+                and cx + hi_u + 1.0 < width - 2.0
+                and cy + lo_v - 1.0 >= 1.0
+                and cy + hi_v + 1.0 < height - 2.0
+            )
             for i in range(h + 1):
                 for j in range(m if i < h else h):
                     wt = wk[i, j]
                     if wt == 0.0:
                         continue
-                    vp, gxp, gyp = _sample(
-                        image32, image64, is32, cx + plus[i, j, 0], cy + plus[i, j, 1]
-                    )
-                    vm, gxm, gym = _sample(
-                        image32, image64, is32, cx + minus[i, j, 0], cy + minus[i, j, 1]
-                    )
+                    if inside:
+                        vp, gxp, gyp = _sample_inside(
+                            image32, image64, is32, cx + plus[i, j, 0], cy + plus[i, j, 1]
+                        )
+                        vm, gxm, gym = _sample_inside(
+                            image32, image64, is32, cx + minus[i, j, 0], cy + minus[i, j, 1]
+                        )
+                    else:
+                        vp, gxp, gyp = _sample(
+                            image32, image64, is32, cx + plus[i, j, 0], cy + plus[i, j, 1]
+                        )
+                        vm, gxm, gym = _sample(
+                            image32, image64, is32, cx + minus[i, j, 0], cy + minus[i, j, 1]
+                        )
                     r = vp - vm
                     jx = gxp - gxm
                     jy = gyp - gym
