@@ -162,7 +162,10 @@ def window_costs(cl, cr, min_d, n_d, nbits, r, div, out):  # type: ignore[no-unt
     exactly, for sums below 2^20 / div²). The rows of costs are computed once each, in a ring
     of ``2r + 2`` rows; the column sums slide down (a row in, a row out), and each row's block
     sums add ``2r + 1`` shifted copies of them: every step one loop over the row's ``W n_d``
-    values (no loop per pixel: the vector lanes run the whole row).
+    values (no loop per pixel: the vector lanes run the whole row). The shifted column sums are
+    read through views of ``cs`` indexed by the loop's own counter: indexed as
+    ``cs[c0 + i]``, each load checked for a negative index, the loops ran scalar, twice the
+    time.
     """
     h, w = cl.shape
     m = 2 * r + 1
@@ -182,18 +185,19 @@ def window_costs(cl, cr, min_d, n_d, nbits, r, div, out):  # type: ignore[no-unt
             if have[yy % (m + 1)] != yy:
                 _cost_row(cl, cr, yy, min_d, n_d, nbits, ring[yy % (m + 1)])
                 have[yy % (m + 1)] = yy
+        cv = cs[c0 : c0 + wn]
         if y == 0:
             for i in range(wn):
-                cs[c0 + i] = 0
+                cv[i] = 0
             for dy in range(-r, r + 1):
                 src = ring[min(max(dy, 0), h - 1) % (m + 1)].reshape(wn)
                 for i in range(wn):
-                    cs[c0 + i] += np.uint16(src[i])
+                    cv[i] += np.uint16(src[i])
         else:  # slide the block down a row
             add = ring[min(y + r, h - 1) % (m + 1)].reshape(wn)
             sub = ring[max(y - r - 1, 0) % (m + 1)].reshape(wn)
             for i in range(wn):
-                cs[c0 + i] = cs[c0 + i] + np.uint16(add[i]) - np.uint16(sub[i])
+                cv[i] = cv[i] + np.uint16(add[i]) - np.uint16(sub[i])
         last = c0 + wn - n_d  # column w - 1
         for x in range(r):
             for k in range(n_d):
@@ -201,16 +205,18 @@ def window_costs(cl, cr, min_d, n_d, nbits, r, div, out):  # type: ignore[no-unt
                 cs[c0 + wn + x * n_d + k] = cs[last + k]
         o = out[y].reshape(wn)
         if m == 3:
+            c1 = cs[n_d : n_d + wn]
+            c2 = cs[2 * n_d : 2 * n_d + wn]
             for i in range(wn):
-                v = np.uint32(half + cs[i] + cs[i + n_d] + cs[i + 2 * n_d])
+                v = np.uint32(half + cs[i] + c1[i] + c2[i])
                 o[i] = np.uint8((v * mul) >> sh)
         else:
             for i in range(wn):
                 t[i] = half
             for dx in range(m):
-                off = dx * n_d
+                cx = cs[dx * n_d : dx * n_d + wn]
                 for i in range(wn):
-                    t[i] += cs[i + off]
+                    t[i] += cx[i]
             for i in range(wn):
                 o[i] = np.uint8((np.uint32(t[i]) * mul) >> sh)
     return out
