@@ -55,6 +55,7 @@ __all__ = [
     "photo_spread",
     "plane_sums",
     "plane_weights",
+    "plane_write",
     "popcount64",
     "rim_labels",
     "select",
@@ -875,4 +876,20 @@ def rim_labels(lab, r2):  # type: ignore[no-untyped-def]  # pragma: no cover - n
         for x in range(w):
             if bd[y, x] <= r2:
                 out[y, x] = lab[by[y, x], bx[y, x]]
+    return out
+
+
+@njit
+def plane_write(disp, lab, take, coef, x0, x1):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Return ``disp`` with the taken segments' pixels in columns ``x0 .. x1 - 1`` on their planes.
+
+    ``_plane_fill``'s last step in one pass: ``float32(a x + b y + c)`` (``coef[k]``, summed in
+    float64 in that order; a copy) where ``lab[y, x] = k > 0`` and ``take[k]``.
+    """
+    out = disp.copy()
+    for y in range(disp.shape[0]):
+        for x in range(x0, x1):
+            k = lab[y, x]
+            if k > 0 and take[k]:
+                out[y, x] = np.float32(coef[k, 0] * x + coef[k, 1] * y + coef[k, 2])
     return out

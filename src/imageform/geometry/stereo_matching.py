@@ -646,6 +646,16 @@ def _plane_fill(
     take &= ~_recessed(d_src, seg, xs, ys, coef, take, disp[inner] - plane, k, m)
     x0 = min(max(min_d + n_d - 1, 0), w)
     x1 = max(min(w, w + min_d), x0)
+    if use_numba(disp) and disp.dtype == np.float32:  # the same numbers in one pass
+        from imageform._kernels import sgm
+
+        return np.asarray(
+            sgm.plane_write(
+                np.ascontiguousarray(disp), np.ascontiguousarray(lab),
+                np.ascontiguousarray(take), np.ascontiguousarray(coef, dtype=np.float64),
+                x0, x1,
+            )
+        )  # fmt: skip
     sel = take[lab]
     sel[:, :x0] = False
     sel[:, x1:] = False
