@@ -1023,3 +1023,52 @@ def test_the_plane_fills_kernels_are_their_numpy_twins_to_the_bit(
     without = _plane_fill(d2, grey2, 0, 16, r2)
     monkeypatch.delenv("IMAGEFORM_DISABLE_NUMBA")
     np.testing.assert_array_equal(_plane_fill(d2, grey2, 0, 16, r2), without)
+
+
+@pytest.mark.parametrize("r2", [1, 2, 9, 13])
+def test_rim_labels_kernel_is_scipys_feature_transform(
+    r2: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The plane fill's rim (each pixel's nearest region within sqrt(r2) px) from the numba
+    kernel's discs is the rim of SciPy's feature transform (the NumPy twin), ties between
+    equally near regions included (dense random labels make many)."""
+    rng = np.random.default_rng(r2)
+    for h, w, share in ((37, 61, 0.9), (50, 23, 0.6), (8, 9, 0.97)):
+        lab = rng.integers(1, 6, (h, w)).astype(np.int32)
+        lab[rng.uniform(size=(h, w)) < share] = 0
+        a = sm._rim_labels(lab, r2)
+        monkeypatch.setenv("IMAGEFORM_DISABLE_NUMBA", "1")
+        b = sm._rim_labels(lab, r2)
+        monkeypatch.delenv("IMAGEFORM_DISABLE_NUMBA")
+        np.testing.assert_array_equal(a, b)
+    lab = np.zeros((7, 7), np.int32)
+    lab[3, 0], lab[3, 6], lab[0, 3] = 1, 2, 3  # (3, 3) is 3 px from all three: the least column
+    rim = sm._rim_labels(lab, 9)
+    assert rim[3, 3] == 1 and rim[3, 5] == 2 and rim[1, 3] == 3 and rim[3, 0] == 0
+    assert sm._rim_labels(lab, 1)[3, 3] == 0
+
+
+def test_plane_write_kernel_is_its_numpy_twin() -> None:
+    """The plane fill's last step (numba ``plane_write``) puts the taken regions' pixels inside
+    the band on their planes, the numbers of the NumPy code it replaces, bit for bit."""
+    from imageform._kernels import sgm
+
+    rng = np.random.default_rng(5)
+    h, w, m = 40, 70, 6
+    disp = rng.uniform(0, 20, (h, w)).astype(np.float32)
+    disp[rng.uniform(size=(h, w)) < 0.2] = np.nan
+    lab = rng.integers(0, m, (h, w)).astype(np.int32)
+    take = np.array([False, True, False, True, True, False])
+    coef = rng.normal(0, 1, (m, 3)) * [0.1, 0.1, 10.0]
+    x0, x1 = 9, 65
+    got = sgm.plane_write(disp, lab, take, coef, x0, x1)
+    want = disp.copy()
+    sel = take[lab]
+    sel[:, :x0] = False
+    sel[:, x1:] = False
+    yy, xx = np.nonzero(sel)
+    k = lab[yy, xx]
+    want[yy, xx] = (coef[k, 0] * xx + coef[k, 1] * yy + coef[k, 2]).astype(np.float32)
+    np.testing.assert_array_equal(got, want)
+    assert np.isnan(got[~sel]).sum() == np.isnan(disp[~sel]).sum()
+    assert not np.array_equal(got[sel], disp[sel])

@@ -55,7 +55,9 @@ __all__ = [
     "photo_spread",
     "plane_sums",
     "plane_weights",
+    "plane_write",
     "popcount64",
+    "rim_labels",
     "select",
     "speckles",
     "window_costs",
@@ -161,7 +163,10 @@ def window_costs(cl, cr, min_d, n_d, nbits, r, div, out):  # type: ignore[no-unt
     exactly, for sums below 2^20 / div²). The rows of costs are computed once each, in a ring
     of ``2r + 2`` rows; the column sums slide down (a row in, a row out), and each row's block
     sums add ``2r + 1`` shifted copies of them: every step one loop over the row's ``W n_d``
-    values (no loop per pixel: the vector lanes run the whole row).
+    values (no loop per pixel: the vector lanes run the whole row). The shifted column sums are
+    read through views of ``cs`` indexed by the loop's own counter: indexed as
+    ``cs[c0 + i]``, each load checked for a negative index, the loops ran scalar, twice the
+    time.
     """
     h, w = cl.shape
     m = 2 * r + 1
@@ -181,18 +186,19 @@ def window_costs(cl, cr, min_d, n_d, nbits, r, div, out):  # type: ignore[no-unt
             if have[yy % (m + 1)] != yy:
                 _cost_row(cl, cr, yy, min_d, n_d, nbits, ring[yy % (m + 1)])
                 have[yy % (m + 1)] = yy
+        cv = cs[c0 : c0 + wn]
         if y == 0:
             for i in range(wn):
-                cs[c0 + i] = 0
+                cv[i] = 0
             for dy in range(-r, r + 1):
                 src = ring[min(max(dy, 0), h - 1) % (m + 1)].reshape(wn)
                 for i in range(wn):
-                    cs[c0 + i] += np.uint16(src[i])
+                    cv[i] += np.uint16(src[i])
         else:  # slide the block down a row
             add = ring[min(y + r, h - 1) % (m + 1)].reshape(wn)
             sub = ring[max(y - r - 1, 0) % (m + 1)].reshape(wn)
             for i in range(wn):
-                cs[c0 + i] = cs[c0 + i] + np.uint16(add[i]) - np.uint16(sub[i])
+                cv[i] = cv[i] + np.uint16(add[i]) - np.uint16(sub[i])
         last = c0 + wn - n_d  # column w - 1
         for x in range(r):
             for k in range(n_d):
@@ -200,16 +206,18 @@ def window_costs(cl, cr, min_d, n_d, nbits, r, div, out):  # type: ignore[no-unt
                 cs[c0 + wn + x * n_d + k] = cs[last + k]
         o = out[y].reshape(wn)
         if m == 3:
+            c1 = cs[n_d : n_d + wn]
+            c2 = cs[2 * n_d : 2 * n_d + wn]
             for i in range(wn):
-                v = np.uint32(half + cs[i] + cs[i + n_d] + cs[i + 2 * n_d])
+                v = np.uint32(half + cs[i] + c1[i] + c2[i])
                 o[i] = np.uint8((v * mul) >> sh)
         else:
             for i in range(wn):
                 t[i] = half
             for dx in range(m):
-                off = dx * n_d
+                cx = cs[dx * n_d : dx * n_d + wn]
                 for i in range(wn):
-                    t[i] += cs[i + off]
+                    t[i] += cx[i]
             for i in range(wn):
                 o[i] = np.uint8((np.uint32(t[i]) * mul) >> sh)
     return out
@@ -818,4 +826,70 @@ def hidden_share(disp, lab, take, coef, limit):  # type: ignore[no-untyped-def] 
     out = np.empty(m)
     for k in range(m):
         out[k] = hides[k] / max(cnt[k], 1)
+    return out
+
+
+@njit
+def rim_labels(lab, r2):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    """Each pixel's nearest segment within ``sqrt(r2)`` px: ``int64 (H, W)``, 0 where none.
+
+    ``_rim_labels``'s numbers without SciPy's feature transform over the whole image: for the
+    pixels outside the segments (``lab == 0``), the label of the nearest pixel with
+    ``lab > 0`` whose squared distance is at most ``r2``, ties between equally near pixels
+    going, as SciPy's ``distance_transform_edt(return_indices=True)`` gives them, to the
+    least column and then the least row. Each segment pixel with a 4-neighbour outside the
+    segments (the only ones nearest to an outside pixel) scatters ``(d², x, y)`` into the
+    pixels of its disc, the least of them kept.
+    """
+    h, w = lab.shape
+    q = 0
+    while (q + 1) * (q + 1) <= r2:
+        q += 1
+    bd = np.full((h, w), r2 + 1, dtype=np.int64)
+    bx = np.zeros((h, w), dtype=np.int64)
+    by = np.zeros((h, w), dtype=np.int64)
+    for y in range(h):
+        for x in range(w):
+            if lab[y, x] == 0:
+                continue
+            edge = (
+                (y > 0 and lab[y - 1, x] == 0)
+                or (y < h - 1 and lab[y + 1, x] == 0)
+                or (x > 0 and lab[y, x - 1] == 0)
+                or (x < w - 1 and lab[y, x + 1] == 0)
+            )
+            if not edge:
+                continue
+            for ty in range(max(y - q, 0), min(y + q + 1, h)):
+                dy2 = (ty - y) * (ty - y)
+                for tx in range(max(x - q, 0), min(x + q + 1, w)):
+                    d2 = dy2 + (tx - x) * (tx - x)
+                    if d2 > r2 or lab[ty, tx] != 0:
+                        continue
+                    b, c = bd[ty, tx], bx[ty, tx]
+                    if d2 < b or (d2 == b and (x < c or (x == c and y < by[ty, tx]))):
+                        bd[ty, tx] = d2
+                        bx[ty, tx] = x
+                        by[ty, tx] = y
+    out = np.zeros((h, w), dtype=np.int64)
+    for y in range(h):
+        for x in range(w):
+            if bd[y, x] <= r2:
+                out[y, x] = lab[by[y, x], bx[y, x]]
+    return out
+
+
+@njit
+def plane_write(disp, lab, take, coef, x0, x1):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Return ``disp`` with the taken segments' pixels in columns ``x0 .. x1 - 1`` on their planes.
+
+    ``_plane_fill``'s last step in one pass: ``float32(a x + b y + c)`` (``coef[k]``, summed in
+    float64 in that order; a copy) where ``lab[y, x] = k > 0`` and ``take[k]``.
+    """
+    out = disp.copy()
+    for y in range(disp.shape[0]):
+        for x in range(x0, x1):
+            k = lab[y, x]
+            if k > 0 and take[k]:
+                out[y, x] = np.float32(coef[k, 0] * x + coef[k, 1] * y + coef[k, 2])
     return out

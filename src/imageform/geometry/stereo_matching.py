@@ -605,16 +605,9 @@ def _plane_fill(
     lab = np.where(keep[lab], lab, 0)
     if not lab.any():
         return disp
-    # each pixel's nearest region pixel; the rim (within PLANE_RIM px) from the squared
-    # distances of the indices (SciPy's distances are their square roots: the same pixels)
-    iy, ix = ndimage.distance_transform_edt(lab == 0, return_distances=False, return_indices=True)
-    if max(h, w) >= 2**15:  # h² + w² past int32
-        iy, ix = iy.astype(np.int64), ix.astype(np.int64)
-    d2 = (iy - np.arange(h, dtype=iy.dtype)[:, None]) ** 2
-    d2 += (ix - np.arange(w, dtype=ix.dtype)) ** 2
-    rim = (lab == 0) & (d2 <= _rim_d2(PLANE_RIM))
+    rim = _rim_labels(lab, _rim_d2(PLANE_RIM))
     at = np.flatnonzero(rim)  # the rim's pixels in raster order, their region and disparity
-    near = lab.ravel()[iy.ravel()[at].astype(np.intp) * w + ix.ravel()[at]]
+    near = rim.ravel()[at]
     d_rim = disp.ravel()[at]
     valid = np.isfinite(disp)
     ok_rim = np.isfinite(d_rim)
@@ -653,6 +646,16 @@ def _plane_fill(
     take &= ~_recessed(d_src, seg, xs, ys, coef, take, disp[inner] - plane, k, m)
     x0 = min(max(min_d + n_d - 1, 0), w)
     x1 = max(min(w, w + min_d), x0)
+    if use_numba(disp) and disp.dtype == np.float32:  # the same numbers in one pass
+        from imageform._kernels import sgm
+
+        return np.asarray(
+            sgm.plane_write(
+                np.ascontiguousarray(disp), np.ascontiguousarray(lab),
+                np.ascontiguousarray(take), np.ascontiguousarray(coef, dtype=np.float64),
+                x0, x1,
+            )
+        )  # fmt: skip
     sel = take[lab]
     sel[:, :x0] = False
     sel[:, x1:] = False
@@ -660,6 +663,35 @@ def _plane_fill(
     k = lab[yy, xx]
     out = disp.copy()
     out[yy, xx] = (coef[k, 0] * xx + coef[k, 1] * yy + coef[k, 2]).astype(np.float32)
+    return out
+
+
+def _rim_labels(lab: NDArray[np.integer[Any]], r2: int) -> NDArray[np.intp]:
+    """Return the label of each pixel's nearest region pixel within ``sqrt(r2)`` px, 0 if none.
+
+    For the pixels outside the regions (``lab == 0``): the label ``lab > 0`` of the nearest
+    region pixel, as SciPy's feature transform (``distance_transform_edt``) picks it, where its
+    squared distance is at most ``r2``; 0 elsewhere (``intp (H, W)``). With numba the kernel
+    ``rim_labels`` gives the same labels from each region's edge pixels' discs, without the
+    transform over the whole image (ties to the least column, then the least row: SciPy's).
+    """
+    if use_numba(lab):
+        from imageform._kernels import sgm
+
+        return np.asarray(sgm.rim_labels(np.ascontiguousarray(lab), int(r2)), dtype=np.intp)
+    from scipy import ndimage
+
+    h, w = lab.shape
+    # each pixel's nearest region pixel; the rim from the squared distances of the indices
+    # (SciPy's distances are their square roots: the same pixels)
+    iy, ix = ndimage.distance_transform_edt(lab == 0, return_distances=False, return_indices=True)
+    if max(h, w) >= 2**15:  # h² + w² past int32
+        iy, ix = iy.astype(np.int64), ix.astype(np.int64)
+    d2 = (iy - np.arange(h, dtype=iy.dtype)[:, None]) ** 2
+    d2 += (ix - np.arange(w, dtype=ix.dtype)) ** 2
+    rim = (lab == 0) & (d2 <= r2)
+    out = np.zeros((h, w), dtype=np.intp)
+    out[rim] = lab[iy[rim], ix[rim]]
     return out
 
 
