@@ -546,14 +546,11 @@ def block_mean(gray: NDArray[np.floating], factor: int) -> NDArray[np.floating]:
     (factor - 1) / 2)`` of ``gray``; float32 stays float32 (summed in float32), other dtypes
     give float64.
     """
-    dtype = np.float32 if gray.dtype == np.float32 else np.float64
-    h, w = gray.shape[0] // factor, gray.shape[1] // factor
-    out = np.zeros((h, w), dtype=dtype)
-    for i in range(factor):
-        for j in range(factor):
-            out += gray[i : h * factor : factor, j : w * factor : factor]
-    out *= dtype(1.0 / (factor * factor))
-    return out
+    from imageform._kernels.checkerboard_pyramid import block_mean_numba, block_mean_numpy
+
+    height, width = gray.shape
+    kernel = block_mean_numba if use_numba(gray) else block_mean_numpy
+    return kernel(gray, factor, 0, height, 0, width)
 
 
 def refine_symmetric_pyramid(
@@ -602,7 +599,10 @@ def refine_symmetric_pyramid(
     y0 = max(0, int(np.floor(start[idx, 1].min() - pad)))
     x1 = min(width, int(np.ceil(start[idx, 0].max() + pad)) + 1)
     y1 = min(height, int(np.ceil(start[idx, 1].max() + pad)) + 1)
-    small = block_mean(gray[y0:y1, x0:x1], f)
+    from imageform._kernels.checkerboard_pyramid import block_mean_numba, block_mean_numpy
+
+    # read in place (a slice would be copied to be contiguous for the kernel)
+    small = (block_mean_numba if use_numba(gray) else block_mean_numpy)(gray, f, y0, y1, x0, x1)
     off = np.array([x0 + 0.5 * (f - 1), y0 + 0.5 * (f - 1)])
     hc = max(2, round(h / f))
     coarse, c_status = refine_symmetric(
