@@ -256,3 +256,20 @@ def test_lattice_problem_twin() -> None:
     assert a == lattice_problem_numpy(crossing) and a is not None and "convex" in a
     kinds.add(a)
     assert len(kinds) >= 3
+
+
+@pytest.mark.parametrize("taps_sigma", [0.6, 1.2, 3.5])
+def test_saddle_maxima_border_zero_is_border_one(image: np.ndarray, taps_sigma: float) -> None:
+    """The response is 0 on the outer pixel ring: a border under 1 (taken as 1) finds the
+    same maxima and peak, whatever the number of taps (4 at a time and the remainder)."""
+    g = image.astype(np.float32)
+    taps = gaussian_weights(taps_sigma).astype(np.float32)
+    a = saddle_maxima_numba(g, taps, 2, 0, 0.02, 1.0)
+    b = saddle_maxima_numba(g, taps, 2, 1, 0.02, 1.0)
+    c = saddle_maxima_numpy(g, taps, 2, 1, 0.02, 1.0)
+    assert a[1] == b[1] and np.array_equal(a[0], b[0])
+    for x, y in zip(a[2:], b[2:], strict=True):
+        assert np.array_equal(x, y)
+    assert np.abs(a[0] - c[0]).max() < 1e-6
+    keep = a[4][:, 1, 1] > 0.02 * a[1]
+    assert a[2][keep].tolist() == c[2].tolist() and a[3][keep].tolist() == c[3].tolist()

@@ -30,6 +30,33 @@ def test_block_mean_values_and_centres() -> None:
     np.testing.assert_array_equal(three, [[8.0, 11.0]])  # the 3 x 3 blocks' centre pixels
 
 
+@pytest.mark.parametrize("dtype", [np.float32, np.float64, np.uint8])
+@pytest.mark.parametrize("factor", [1, 2, 3, 4])
+def test_block_mean_kernel_is_its_twin_bit_for_bit(dtype: type, factor: int) -> None:
+    """The one-pass kernel adds the twin's terms in its order: the same bits, on a rectangle
+    read in place (odd offsets, partial blocks dropped), float32 kept, others as float64."""
+    from imageform._kernels.checkerboard_pyramid import block_mean_numba, block_mean_numpy
+
+    rng = np.random.default_rng(factor)
+    g = (rng.random((61, 83)) * 255).astype(dtype)
+    for bounds in [(0, 61, 0, 83), (3, 50, 5, 78), (7, 7 + factor - 1, 2, 40), (4, 4, 0, 0)]:
+        a = block_mean_numba(g, factor, *bounds)
+        b = block_mean_numpy(g, factor, *bounds)
+        assert a.dtype == b.dtype == (np.float32 if dtype is np.float32 else np.float64)
+        assert a.shape == b.shape == ((bounds[1] - bounds[0]) // factor,
+                                      (bounds[3] - bounds[2]) // factor)  # fmt: skip
+        assert a.tobytes() == b.tobytes()
+    # a block's mean: its float32 sum, from 0 in raster order, times 1/f² rounded to float32
+    block = rng.random((factor, factor)).astype(np.float32)
+    total = np.float32(0.0)
+    for v in block.ravel():
+        total = np.float32(total + v)
+    mean = block_mean_numba(block, factor, 0, factor, 0, factor)[0, 0]
+    assert mean == total * np.float32(1.0 / factor**2)
+    with pytest.raises(ValueError, match="expected 0 <= y0 <= y1"):
+        block_mean_numba(g, factor, 0, 62, 0, 83)
+
+
 @pytest.mark.parametrize("masked", [False, True])
 def test_half_window_sums_are_the_whole_windows_but_for_rounding(masked: bool) -> None:
     """``half=True`` (each pair ``(d, -d)`` summed once, the normal equations halved) takes the

@@ -47,6 +47,7 @@ from imageform._kernels.checkerboard_symmetric import (
     symmetric_step,
     symmetric_step_numpy,
     symmetric_window_weights,
+    window_tables,
 )
 from imageform._kernels.jit import njit, run_tasks
 
@@ -71,7 +72,7 @@ def refine_local_numba(
     squares) are left out. A float32 ``image`` goes to the kernel beside an empty float64 one
     and the other way round.
     """
-    w = symmetric_window_weights(h)
+    w, _ = window_tables(h)
     li = np.ascontiguousarray(linv, dtype=np.float64).reshape(-1, 4)
     cf = np.ascontiguousarray(coef, dtype=np.float64).reshape(-1, 18)
     ext = float(extent)

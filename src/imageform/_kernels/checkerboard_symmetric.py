@@ -70,6 +70,17 @@ def _shading_inverse(h: int, w: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.asarray(np.linalg.inv(m), dtype=np.float64)
 
 
+@functools.lru_cache(maxsize=32)
+def window_tables(h: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Return :func:`symmetric_window_weights` ``(h)`` and its :func:`_shading_inverse`, kept.
+
+    Computed once per window size (each call of a refinement needs both: a fair share of a
+    small view's time). Shared: the kernels only read them.
+    """
+    w = symmetric_window_weights(h)
+    return w, _shading_inverse(h, w)
+
+
 def symmetric_pair_mask(
     mask: NDArray[np.floating] | NDArray[np.bool_] | None, n: int, h: int
 ) -> NDArray[np.float64]:
@@ -104,8 +115,7 @@ def refine_symmetric_numba(
     the rounding, in about two thirds of the time (a large window's steps); False (the
     default) sums the whole window, as before.
     """
-    w = symmetric_window_weights(h)
-    inv = _shading_inverse(h, w)
+    w, inv = window_tables(h)
     pm = symmetric_pair_mask(mask, corners.shape[0], h)
     has = mask is not None
     n = corners.shape[0]

@@ -5,6 +5,7 @@ Part of :mod:`imageform.geometry.checkerboard`; :func:`refine_corners` is public
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
@@ -397,6 +398,23 @@ def _lagrange_powers(nodes: int, at: int) -> NDArray[np.float64]:
     return out
 
 
+@lru_cache(maxsize=64)
+def _stencil(n: int) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """Return the Lagrange bases (n, m, 3) and node indices (n, m) of a grid side of ``n``.
+
+    Each of the ``n`` corners of a side takes the ``m = min(3, n)`` nearest nodes (the corner
+    in the middle but at the ends), its basis from :func:`_lagrange_powers`. The same for
+    every board of that side: kept (read-only), computed once per side length.
+    """
+    m = min(3, n)
+    start = np.clip(np.arange(n) - 1, 0, n - m)
+    basis = np.stack([_lagrange_powers(m, int(at)) for at in np.arange(n) - start])
+    nodes = start[:, None] + np.arange(m)[None]
+    basis.flags.writeable = False
+    nodes.flags.writeable = False
+    return basis, nodes
+
+
 def grid_maps(grid: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Return each corner's local map of the board from its grid neighbours.
 
@@ -408,13 +426,8 @@ def grid_maps(grid: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[n
     linear part ``linv`` (R*C, 2, 2) (NaN where singular).
     """
     rows, cols, _ = grid.shape
-    nr, nc = min(3, rows), min(3, cols)
-    r0 = np.clip(np.arange(rows) - 1, 0, rows - nr)
-    c0 = np.clip(np.arange(cols) - 1, 0, cols - nc)
-    br = np.stack([_lagrange_powers(nr, int(at)) for at in np.arange(rows) - r0])  # (R, nr, 3)
-    bc = np.stack([_lagrange_powers(nc, int(at)) for at in np.arange(cols) - c0])  # (C, nc, 3)
-    ri = r0[:, None] + np.arange(nr)[None]  # (R, nr)
-    ci = c0[:, None] + np.arange(nc)[None]  # (C, nc)
+    br, ri = _stencil(rows)  # (R, nr, 3), (R, nr)
+    bc, ci = _stencil(cols)  # (C, nc, 3), (C, nc)
     sten = grid[ri[:, None, :, None], ci[None, :, None, :]]  # (R, C, nr, nc, 2)
     sten = sten - grid[:, :, None, None, :]
     # coef[r, c, a, b] = sum_{l, k} bc[c, k, a] br[r, l, b] sten[r, c, l, k]
@@ -533,14 +546,11 @@ def block_mean(gray: NDArray[np.floating], factor: int) -> NDArray[np.floating]:
     (factor - 1) / 2)`` of ``gray``; float32 stays float32 (summed in float32), other dtypes
     give float64.
     """
-    dtype = np.float32 if gray.dtype == np.float32 else np.float64
-    h, w = gray.shape[0] // factor, gray.shape[1] // factor
-    out = np.zeros((h, w), dtype=dtype)
-    for i in range(factor):
-        for j in range(factor):
-            out += gray[i : h * factor : factor, j : w * factor : factor]
-    out *= dtype(1.0 / (factor * factor))
-    return out
+    from imageform._kernels.checkerboard_pyramid import block_mean_numba, block_mean_numpy
+
+    height, width = gray.shape
+    kernel = block_mean_numba if use_numba(gray) else block_mean_numpy
+    return kernel(gray, factor, 0, height, 0, width)
 
 
 def refine_symmetric_pyramid(
@@ -589,7 +599,10 @@ def refine_symmetric_pyramid(
     y0 = max(0, int(np.floor(start[idx, 1].min() - pad)))
     x1 = min(width, int(np.ceil(start[idx, 0].max() + pad)) + 1)
     y1 = min(height, int(np.ceil(start[idx, 1].max() + pad)) + 1)
-    small = block_mean(gray[y0:y1, x0:x1], f)
+    from imageform._kernels.checkerboard_pyramid import block_mean_numba, block_mean_numpy
+
+    # read in place (a slice would be copied to be contiguous for the kernel)
+    small = (block_mean_numba if use_numba(gray) else block_mean_numpy)(gray, f, y0, y1, x0, x1)
     off = np.array([x0 + 0.5 * (f - 1), y0 + 0.5 * (f - 1)])
     hc = max(2, round(h / f))
     coarse, c_status = refine_symmetric(
