@@ -8,7 +8,9 @@ import them from here instead of from the colour package's internals:
 
 - :mod:`imageform.spectral` — the CIE daylight locus (D-series illuminants) and the CIE 1960
   UCS (:func:`imageform.spectral.planckian_cct`); spectral sits below colour in the layers;
-- :mod:`imageform.analysis` — the sRGB curve and the HSV hexcone on image blocks.
+- :mod:`imageform.analysis` — the sRGB curve and the HSV hexcone on image blocks;
+- :mod:`imageform.geometry` and :mod:`imageform.io` — the Rec. 601 luma of the detectors'
+  and matchers' grey images (:func:`luma_601`, :func:`luma_601_matmul`).
 
 Every function takes the array namespace ``xp`` first and arrays that are already checked
 (shape, dtype, finiteness); nothing here validates, and nothing imports a domain package.
@@ -23,6 +25,7 @@ __all__ = [
     "DAYLIGHT_HIGH",
     "DAYLIGHT_LOW",
     "DAYLIGHT_RANGE",
+    "LUMA_601",
     "SRGB_A",
     "SRGB_ENC_THRESHOLD",
     "SRGB_GAMMA",
@@ -32,6 +35,8 @@ __all__ = [
     "daylight_xy",
     "hexcone_hue",
     "hsv_to_rgb",
+    "luma_601",
+    "luma_601_matmul",
     "pos_pow",
     "rgb_to_hsv",
     "srgb_decode",
@@ -118,6 +123,51 @@ def hsv_to_rgb(xp: Any, hsv: Any) -> Any:
         t = xp.clip(xp.minimum(k, 4.0 - k), 0.0, 1.0)
         out.append(v - v * s * t)
     return xp.stack(out, axis=-1)
+
+
+# ---------------------------------------------------------------- Rec. 601 luma
+# ITU-R BT.601-7, section 2.5.1: Y' = 0.299 R' + 0.587 G' + 0.114 B' (the grey of OpenCV's
+# cvtColor and of the lecture).
+LUMA_601 = (0.299, 0.587, 0.114)
+
+
+def luma_601(xp: Any, rgb: Any) -> Any:
+    r"""Rec. 601 luma of ``rgb (..., C)``, C >= 3, channel by channel, in the input's scale.
+
+    .. math:: Y' = 0.299 R' + 0.587 G' + 0.114 B'
+
+    (ITU-R BT.601-7, section 2.5.1), summed left to right as written, with the weights as
+    Python floats: a float32 input stays float32, an integer one becomes float64. Channels
+    after the third (alpha) are ignored. Not the bits of :func:`luma_601_matmul`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> float(luma_601(np, np.array([200.0, 100.0, 50.0])))
+    124.2
+    """
+    w = LUMA_601
+    return rgb[..., 0] * w[0] + rgb[..., 1] * w[1] + rgb[..., 2] * w[2]
+
+
+def luma_601_matmul(xp: Any, rgb: Any, weights_dtype: Any = None) -> Any:
+    r"""Rec. 601 luma of ``rgb (..., 3)`` as one product ``rgb @ w``, ``w`` = :data:`LUMA_601`.
+
+    The same formula as :func:`luma_601` with the matrix product's summation (and the result
+    dtype of ``rgb`` with ``w`` in ``weights_dtype``, float64 by default): its bits differ
+    from :func:`luma_601`'s in the last place, so each caller keeps the form it had.
+    ``rgb`` must have exactly 3 channels.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> float(luma_601_matmul(np, np.array([200.0, 100.0, 50.0])))
+    124.2
+    >>> luma_601_matmul(np, np.array([[255, 0, 0]], np.uint8)).dtype
+    dtype('float64')
+    """
+    w = xp.asarray(LUMA_601, dtype=xp.float64 if weights_dtype is None else weights_dtype)
+    return rgb @ w
 
 
 # ---------------------------------------------------------------- CIE chromaticity

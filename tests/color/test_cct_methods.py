@@ -138,3 +138,19 @@ def test_ohno2013_correction_for_the_one_percent_table() -> None:
         assert np.max(np.abs(cor / t - 1)) < np.max(np.abs(raw / t - 1))
         fine, _ = uv_to_cct_ohno2013(uv)
         assert np.max(np.abs(fine / t - 1)) < 5e-6  # measured 2.5e-6 at most
+
+
+def test_cached_cmfs_are_read_only_and_shared() -> None:
+    """The 1 nm CIE 1931 2° table of planckian_uv: one read-only pair, 360-780 nm."""
+    from imageform.color.cct_methods import _cmf_1nm
+    from imageform.spectral import cmfs
+
+    wl, cmf = _cmf_1nm()
+    assert _cmf_1nm()[0] is wl and _cmf_1nm()[1] is cmf
+    assert not wl.flags.writeable and not cmf.flags.writeable
+    assert wl.shape == (421,) and cmf.shape == (421, 3) and (wl[0], wl[-1]) == (360.0, 780.0)
+    np.testing.assert_array_equal(cmf, cmfs(2).values[:421])  # the table starts at 360 nm
+    with pytest.raises(ValueError, match="read-only"):
+        cmf[0, 0] = 1.0
+    # CIE 015:2018 Table 4: ybar(555 nm) = 1.0
+    assert cmf[195, 1] == pytest.approx(1.0, abs=1e-6)

@@ -159,3 +159,64 @@ def test_bad_input() -> None:
         simulate_cvd(np.zeros((2, 4)), "deutan")
     with pytest.raises(InvalidInputError, match="piecewise"):
         cvd_matrix("deutan", 1.0, "brettel1997")
+
+
+# --------------------------------------------------------------------------- cached arrays
+
+
+def test_cached_matrices_are_read_only_and_shared() -> None:
+    """The cached LMS, Viénot and Brettel arrays are one read-only object per key."""
+    from imageform.color import cvd
+
+    t, t_inv = cvd._rgb_lms()
+    assert cvd._rgb_lms()[0] is t and cvd._rgb_lms()[1] is t_inv
+    np.testing.assert_allclose(t @ t_inv, np.eye(3), atol=1e-12)
+    for d in ("protan", "deutan", "tritan"):
+        v = cvd._vienot_matrix(d)
+        assert cvd._vienot_matrix(d) is v
+        planes = cvd._brettel_planes(d)
+        assert all(a is b for a, b in zip(cvd._brettel_planes(d), planes, strict=True))
+        for a in (t, t_inv, v, *planes):
+            assert not a.flags.writeable
+            with pytest.raises(ValueError, match="read-only"):
+                a[0] = 0.0
+    # Viénot et al. (1999): the projection keeps white; the doctest's protan value
+    np.testing.assert_allclose(cvd._vienot_matrix("protan") @ np.ones(3), np.ones(3), atol=1e-12)
+    np.testing.assert_allclose(
+        cvd_matrix("protan", 1.0, "vienot1999") @ [1.0, 0.0, 0.0],
+        [0.1089, 0.1089, 0.0045],
+        atol=5e-5,
+    )
+
+
+def test_brettel_planes_are_writable_copies_of_the_cache() -> None:
+    """The public result is the caller's (writable, equal bits); simulate_cvd reads the cache."""
+    from imageform.color import cvd
+
+    for d in ("protan", "deutan", "tritan"):
+        out = brettel_planes(d)
+        for a, c in zip(out, cvd._brettel_planes(d), strict=True):
+            assert a.flags.writeable and a is not c
+            np.testing.assert_array_equal(a, c)
+    rgb = np.random.default_rng(5).random((4, 5, 3))
+    h1, h2, n = brettel_planes("deutan")
+    want = np.where(((rgb @ n) >= 0)[..., None], rgb @ h1.T, rgb @ h2.T)
+    got = simulate_cvd(rgb, "deutan", method="brettel1997", linear=True)
+    np.testing.assert_array_equal(got, want)
+
+
+def test_brettel_on_torch_gets_writable_copies(monkeypatch: pytest.MonkeyPatch) -> None:
+    """torch.asarray shares a float64 array and warns (once a process) on a read-only one:
+    NumPy reads the cached planes, torch gets brettel_planes' writable copies."""
+    from imageform.color import cvd
+
+    torch = pytest.importorskip("torch")
+    calls: list[str] = []
+    real = cvd.brettel_planes
+    monkeypatch.setattr(cvd, "brettel_planes", lambda d: calls.append(d) or real(d))
+    rgb = np.random.default_rng(6).random((3, 4, 3))
+    want = simulate_cvd(rgb, "protan", method="brettel1997", linear=True)
+    assert calls == []
+    out = simulate_cvd(torch.asarray(rgb), "protan", method="brettel1997", linear=True)
+    assert calls == ["protan"]
+    np.testing.assert_allclose(out.numpy(), want, rtol=0, atol=1e-12)  # torch sums its own way

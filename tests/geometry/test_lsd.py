@@ -321,12 +321,13 @@ def test_methods_and_bad_inputs() -> None:
 
 def test_grey_levels_are_the_grey_lsd_reads_without_its_checks() -> None:
     """grey_levels (the stretch's decision) reads what grey reads, 0-255, and refuses nothing."""
-    from imageform.geometry._plumb_edges import grey, grey_levels, luma_601
+    from imageform._colormath import luma_601
+    from imageform.geometry._plumb_edges import grey, grey_levels
 
     rng = np.random.default_rng(4)
     rgb8 = rng.integers(0, 256, (6, 7, 3), dtype=np.uint8)
     # Rec. 601 (ITU-R BT.601-7): Y' = 0.299 R' + 0.587 G' + 0.114 B'
-    assert float(luma_601(np.array([255.0, 0.0, 0.0]))) == 0.299 * 255.0
+    assert float(luma_601(np, np.array([255.0, 0.0, 0.0]))) == 0.299 * 255.0
     for img in (rgb8, rgb8[..., 0], rgb8[..., :1], rgb8.astype(np.uint16) * 257, rgb8 / 255.0):
         levels = grey_levels(img)
         assert levels is not None and levels.dtype == np.float64 and levels.shape == (6, 7)

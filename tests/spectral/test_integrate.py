@@ -195,3 +195,13 @@ def test_resolve_illuminant() -> None:
         resolve_illuminant(two)
     with pytest.raises(InvalidInputError, match="unknown illuminant 'D6'"):
         resolve_illuminant("D6")
+
+
+def test_integration_grid_is_cached_read_only() -> None:
+    """The cached grid handed out by integration_weights cannot be written (nor the cache)."""
+    from imageform.spectral import cmfs, integration_weights
+
+    grid, w = integration_weights(cmfs(2), illuminant=None)
+    assert not grid.flags.writeable and not w.flags.writeable
+    assert integration_weights(cmfs(2), illuminant=None).wavelengths is grid
+    assert (grid[0], grid[-1], grid.size) == (360.0, 830.0, 471)  # CIE 015 Table 4, 1 nm

@@ -141,13 +141,19 @@ def xy_to_cct_hernandez1999(xy: ArrayLike) -> Array:
 
 @functools.lru_cache(maxsize=1)
 def _cmf_1nm() -> tuple[np.ndarray, np.ndarray]:
-    """CIE 1931 2° CMFs on 360-780 nm, 1 nm (ASTM E308's shape, colour-science's default)."""
+    """CIE 1931 2° CMFs on 360-780 nm, 1 nm (ASTM E308's shape, colour-science's default).
+
+    Cached and read-only: (wavelengths (M,), CMFs (M, 3)) shared by every call.
+    """
     from imageform.spectral import cmfs
 
     c = cmfs(2)
     wl = np.asarray(c.wavelengths, dtype=np.float64)
     keep = (wl >= 360.0) & (wl <= 780.0)
-    return wl[keep], np.asarray(c.values, dtype=np.float64)[keep]
+    wl, cmf = wl[keep], np.asarray(c.values, dtype=np.float64)[keep]  # new arrays (a mask)
+    wl.setflags(write=False)
+    cmf.setflags(write=False)
+    return wl, cmf
 
 
 def planckian_uv(cct: ArrayLike) -> np.ndarray:

@@ -32,7 +32,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from imageform._backend import device_of, namespace
+from imageform._backend import device_of, is_numpy_namespace, namespace
 from imageform._dask import chunkwise
 from imageform._typing import Array, ArrayLike
 from imageform._validate import as_bool, as_image_strict, as_real, check_name
@@ -136,10 +136,14 @@ def machado_matrix(deficiency: str, severity: float = 1.0) -> np.ndarray:
 
 @lru_cache(maxsize=1)
 def _rgb_lms() -> tuple[np.ndarray, np.ndarray]:
+    """Linear sRGB to LMS and back, (3, 3) each (cached, read-only: shared by every call)."""
     from imageform.color.rgb_spaces import rgb_to_xyz_matrix
 
     t = _M_SP @ rgb_to_xyz_matrix("srgb")
-    return t, np.linalg.inv(t)
+    t_inv = np.linalg.inv(t)
+    t.setflags(write=False)
+    t_inv.setflags(write=False)
+    return t, t_inv
 
 
 def _anchor_lms(wavelength: float) -> np.ndarray:
@@ -182,11 +186,13 @@ def brettel_planes(deficiency: str) -> BrettelPlanes:
     [1.0, 1.0, 1.0]
     """
     h1, h2, n = _brettel_planes(_deficiency(deficiency))  # named before the cache hashes it
+    # copies: the caller owns (and may write) the result; the cached planes are read-only
     return BrettelPlanes(h1.copy(), h2.copy(), n.copy())
 
 
 @lru_cache(maxsize=8)
 def _brettel_planes(d: str) -> BrettelPlanes:
+    """:func:`brettel_planes` of a checked name (cached, read-only arrays: shared)."""
     t, t_inv = _rgb_lms()
     white = t @ np.ones(3)
     k = _MISSING[d]
@@ -199,15 +205,21 @@ def _brettel_planes(d: str) -> BrettelPlanes:
     # orient n_sep so that the long-wavelength anchor lies on its positive side
     if n_sep @ long_ < 0:
         n_sep = -n_sep
-    return BrettelPlanes(t_inv @ p_long @ t, t_inv @ p_short @ t, t.T @ n_sep)
+    planes = BrettelPlanes(t_inv @ p_long @ t, t_inv @ p_short @ t, t.T @ n_sep)
+    for a in planes:
+        a.setflags(write=False)
+    return planes
 
 
 @lru_cache(maxsize=8)
 def _vienot_matrix(d: str) -> np.ndarray:
+    """Viénot's projection (3, 3) for a checked name (cached, read-only: shared)."""
     t, t_inv = _rgb_lms()
     white = t @ np.ones(3)
     third = t @ (np.array([1.0, 0.0, 0.0]) if d == "tritan" else np.array([0.0, 0.0, 1.0]))
-    return np.asarray(t_inv @ _projection(_MISSING[d], white, third) @ t)
+    m = np.asarray(t_inv @ _projection(_MISSING[d], white, third) @ t)
+    m.setflags(write=False)
+    return m
 
 
 def cvd_matrix(deficiency: str, severity: float = 1.0, method: str = "machado2009") -> np.ndarray:
@@ -292,7 +304,9 @@ def simulate_cvd(
         return xp.asarray(a, dtype=lin.dtype, device=dev)
 
     if m == "brettel1997":
-        h1, h2, n = brettel_planes(d)
+        # the cached read-only planes, only read here; torch.asarray would share a float64
+        # one and warn that it is not writable, so other namespaces get writable copies
+        h1, h2, n = _brettel_planes(d) if is_numpy_namespace(xp) else brettel_planes(d)
         side = lin @ mat(n)
         sim = xp.where((side >= 0)[..., None], lin @ mat(h1).T, lin @ mat(h2).T)
         out = (1.0 - s) * lin + s * sim if s < 1.0 else sim

@@ -11,38 +11,26 @@ import math
 
 import numpy as np
 
+from imageform._colormath import luma_601
 from imageform._typing import ArrayLike, FloatArray
 from imageform._validate import _INTEGER_SCALE, as_image
 from imageform.errors import InvalidInputError
 
-__all__ = ["contours", "edge_points", "grey", "grey_levels", "luma_601"]
-
-
-def luma_601(rgb: FloatArray) -> FloatArray:
-    r"""Rec. 601 luma of encoded RGB ``(..., 3)``, in the scale of the input, unchecked.
-
-    .. math:: Y' = 0.299 R' + 0.587 G' + 0.114 B'
-
-    (ITU-R BT.601-7, section 2.5.1): the grey of :func:`grey` and :func:`grey_levels`.
-
-    Examples
-    --------
-    >>> float(luma_601(np.array([200.0, 100.0, 50.0])))
-    124.2
-    """
-    return rgb[..., 0] * 0.299 + rgb[..., 1] * 0.587 + rgb[..., 2] * 0.114
+__all__ = ["contours", "edge_points", "grey", "grey_levels"]
 
 
 def grey(image: ArrayLike) -> FloatArray:
     """Grey float64 of a grey or RGB image (Rec. 601 luma of RGB), as :func:`as_image` scales.
 
-    The one reading of an image for the line detectors (``lsd_segments`` and the plumb line).
+    The one reading of an image for the line detectors (``lsd_segments``,
+    ``detect_line_segments`` and the plumb line); the luma is
+    :func:`imageform._colormath.luma_601` (channel by channel).
     """
     arr = np.asarray(image)
     if arr.ndim == 2:
         img = as_image(arr[..., None], "image", channels=1)[..., 0]
     elif arr.ndim == 3 and arr.shape[-1] == 3:
-        img = luma_601(as_image(arr, "image"))
+        img = luma_601(np, as_image(arr, "image"))
     elif arr.ndim == 3 and arr.shape[-1] == 1:
         img = as_image(arr, "image", channels=1)[..., 0]
     else:
@@ -58,8 +46,9 @@ def grey_levels(image: ArrayLike) -> FloatArray | None:
     For code that only decides something from an image that :func:`grey` reads later (and
     refuses, if it must, with its message): the full range of ``uint8`` / ``uint16`` (as
     :func:`~imageform._validate.as_image` takes it) or floats in [0, 1] mapped to 0-255, in
-    float64 throughout, then :func:`luma_601` of RGB. ``None`` for a shape or dtype that
-    :func:`grey` refuses; NaN, inf and out-of-range values come back as they are.
+    float64 throughout, then :func:`~imageform._colormath.luma_601` of RGB. ``None`` for a
+    shape or dtype that :func:`grey` refuses; NaN, inf and out-of-range values come back as
+    they are.
 
     Examples
     --------
@@ -80,7 +69,7 @@ def grey_levels(image: ArrayLike) -> FloatArray | None:
     else:
         return None
     levels = arr.astype(np.float64) * (255.0 / full)
-    return luma_601(levels) if levels.ndim == 3 else levels
+    return luma_601(np, levels) if levels.ndim == 3 else levels
 
 
 def edge_points(img: FloatArray, threshold: float) -> tuple[FloatArray, FloatArray]:

@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from imageform._colormath import luma_601_matmul
 from imageform._typing import ArrayLike
 from imageform._validate import as_int, as_real, describe, format_shape
 from imageform.errors import InvalidInputError, UnknownOptionError
@@ -390,7 +391,7 @@ def _gray01_checked(image: object) -> NDArray[np.float64]:
     if not (math.isfinite(lo) and math.isfinite(hi)):
         raise InvalidInputError("image contains NaN or inf")
     if g.ndim == 3:
-        g = g @ np.array([0.299, 0.587, 0.114])
+        g = luma_601_matmul(np, g)  # Rec. 601 luma
         lo, hi = float(np.min(g)), float(np.max(g))
     if arr.dtype.kind == "u":
         g = g / float(np.iinfo(arr.dtype).max)

@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 
 from imageform import _deprecate
 from imageform._backend import to_numpy, use_numba
+from imageform._colormath import luma_601_matmul
 from imageform._typing import ArrayLike
 from imageform._validate import (
     as_image,
@@ -44,10 +45,6 @@ __all__ = [
     "room_to_border",
 ]
 
-# ITU-R BT.601 luma weights (the grey conversion OpenCV's cvtColor uses)
-_LUMA = np.array([0.299, 0.587, 0.114])
-
-
 #: The largest refinement half-window (pixels): a (2h+1)^2 window per corner.
 MAX_HALF_WINDOW = 1000
 
@@ -70,7 +67,7 @@ def as_gray(image: ArrayLike) -> NDArray[np.floating]:
     if arr.ndim == 3 and arr.shape[-1] == 1:
         arr = arr[..., 0]
     elif arr.ndim == 3 and arr.shape[-1] == 3:
-        arr = arr @ _LUMA.astype(arr.dtype)
+        arr = luma_601_matmul(np, arr, arr.dtype)  # Rec. 601 luma (as OpenCV's cvtColor)
     elif arr.ndim != 2:
         raise InvalidInputError(
             "expected image of shape (H, W), (H, W, 1) or (H, W, 3), "

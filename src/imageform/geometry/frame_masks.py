@@ -16,6 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from imageform._colormath import luma_601_matmul
 from imageform._typing import ArrayLike
 from imageform._validate import as_int, as_real, describe
 from imageform.errors import InvalidInputError
@@ -293,7 +294,7 @@ def _sharpness(image: ArrayLike, mask: ArrayLike | None, name: str) -> float:
 
     cv2 = require("cv2", what="frame_sharpness")
     a = _unit(image, name)
-    g = a if a.ndim == 2 else a @ np.array([0.299, 0.587, 0.114], np.float32)
+    g = a if a.ndim == 2 else luma_601_matmul(np, a, np.float32)  # Rec. 601, float32 weights
     lap = cv2.Laplacian(np.ascontiguousarray(g, np.float32), cv2.CV_32F, ksize=1)
     if mask is None:
         inside = np.ones(g.shape, bool)

@@ -38,7 +38,6 @@ from imageform._typing import ArrayLike, FloatArray
 from imageform._validate import (
     MAX_MAGNITUDE,
     as_float_bounded,
-    as_image,
     as_real,
     check_min_side,
     check_positive,
@@ -46,6 +45,7 @@ from imageform._validate import (
     shape_text,
 )
 from imageform.errors import InvalidInputError, UnknownOptionError
+from imageform.geometry._plumb_edges import grey as _grey
 
 __all__ = ["LineSegments", "detect_line_segments"]
 
@@ -120,22 +120,6 @@ class LineSegments:
         from imageform.geometry.vanishing import lines_from_segments
 
         return np.asarray(lines_from_segments(self.endpoints))
-
-
-def _grey(image: ArrayLike) -> FloatArray:
-    arr = np.asarray(image)
-    if arr.ndim == 2:
-        img = as_image(arr[..., None], channels=1)[..., 0]
-    elif arr.ndim == 3 and arr.shape[-1] == 3:
-        rgb = as_image(arr)
-        img = rgb[..., 0] * 0.299 + rgb[..., 1] * 0.587 + rgb[..., 2] * 0.114  # Rec. 601 luma
-    elif arr.ndim == 3 and arr.shape[-1] == 1:
-        img = as_image(arr, channels=1)[..., 0]
-    else:
-        raise InvalidInputError(
-            f"expected a grey (H, W) or RGB (H, W, 3) image, got shape {arr.shape}"
-        )
-    return np.asarray(img, dtype=np.float64)
 
 
 def _gradient(img: FloatArray) -> tuple[FloatArray, FloatArray]:

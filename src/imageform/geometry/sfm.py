@@ -80,6 +80,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from imageform._colormath import luma_601_matmul
 from imageform._typing import ArrayLike
 from imageform._validate import as_bool, as_int, as_real, as_real_array, describe
 from imageform.errors import DegenerateConfigurationError, InvalidInputError
@@ -246,7 +247,7 @@ def detect_features(
     a = np.asarray(image)
     dtype = a.dtype
     if dtype.kind in "uif" and a.ndim == 3 and a.shape[-1] in (3, 4):
-        a = a[..., :3] @ np.array([0.299, 0.587, 0.114])
+        a = luma_601_matmul(np, a[..., :3])  # Rec. 601 luma, float64
     elif a.ndim == 3 and a.shape[-1] == 1:
         a = a[..., 0]
     if a.ndim != 2 or a.size == 0 or dtype.kind not in "uif":

@@ -26,6 +26,7 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from imageform._backend import to_numpy, use_numba
+from imageform._colormath import luma_601
 from imageform._validate import (
     as_int,
     as_real,
@@ -106,7 +107,7 @@ def _grey(image: Any, name: str) -> NDArray[np.float32]:
         if a.shape[2] == 1:
             a = a[..., 0]
         elif a.shape[2] in (3, 4):
-            a = a[..., 0] * 0.299 + a[..., 1] * 0.587 + a[..., 2] * 0.114  # Rec. 601 luma
+            a = luma_601(np, a)  # Rec. 601 luma, channel by channel
         else:
             raise InvalidInputError(
                 f"expected {name} as a grey (H, W) or colour (H, W, 3) image, got shape {a.shape}"

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from imageform._colormath import luma_601
 from imageform._typing import ArrayLike
 from imageform._validate import as_matrix, check_option, describe
 from imageform.errors import InvalidInputError
@@ -120,10 +121,7 @@ class Interlacing:
 def _luma(image: ArrayLike, name: str) -> np.ndarray:
     a = np.asarray(image)
     if a.ndim == 3 and a.shape[-1] in (1, 3, 4):
-        if a.shape[-1] == 1:
-            a = a[..., 0]
-        else:
-            a = a[..., 0] * 0.299 + a[..., 1] * 0.587 + a[..., 2] * 0.114
+        a = a[..., 0] if a.shape[-1] == 1 else luma_601(np, a)  # Rec. 601, channel by channel
     if a.ndim != 2 or a.dtype.kind not in "uif" or a.shape[0] < 2:
         raise InvalidInputError(
             f"expected {name} as an (H, W) or (H, W, 3) image of at least 2 rows, got {describe(a)}"

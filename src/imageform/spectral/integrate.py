@@ -128,8 +128,11 @@ def _as_spectrum(s: object, name: str) -> Spectrum:
 
 @lru_cache(maxsize=64)
 def _grid(lo: float, hi: float, step: float) -> np.ndarray:
+    """Return the integration grid (cached, read-only: :func:`integration_weights` hands it out)."""
     n = int(np.floor((hi - lo) / step + 1e-9))
-    return lo + step * np.arange(n + 1, dtype=np.float64)
+    grid = lo + step * np.arange(n + 1, dtype=np.float64)
+    grid.setflags(write=False)
+    return grid
 
 
 class IntegrationWeights(NamedTuple):
