@@ -531,7 +531,8 @@ def test_mask_leaves_out_the_chart_and_the_clipped_pixels(method: str) -> None:
     grey scene around them; the whole mask kept is the same as no mask."""
     img, keep = _scene_with_chart_and_highlight()
     e = estimate_illuminant(img, method, transfer="linear", mask=keep)
-    assert _angle(e, ILLUM) < 1e-6
+    # rounding only (1.2e-6 degrees for gray_world on an AMD EPYC, under 1e-6 elsewhere)
+    assert _angle(e, ILLUM) < 1e-5
     full = estimate_illuminant(img, method, transfer="linear", mask=np.ones_like(keep))
     np.testing.assert_allclose(full, estimate_illuminant(img, method, transfer="linear"))
 
