@@ -1253,8 +1253,9 @@ def _finish(
             status = status.copy()
             status[moved] = sym_status[moved]
         else:
-            refined, status = _symmetric_steps(gray, refined, status, pts, grid, h, step,
-                                               max_iter, tol)  # fmt: skip
+            refined, status = _symmetric_steps(
+                gray, refined, status, pts, grid, h, step, max_iter, tol
+            )
     return _checked(refined, grid.shape, size, status, sigma, partial)
 
 

@@ -536,18 +536,23 @@ def _local_selection(
     return idx, linv, coef
 
 
-def block_mean(gray: NDArray[np.floating], factor: int) -> NDArray[np.floating]:
+def block_mean(
+    gray: NDArray[np.floating],
+    factor: int,
+    region: tuple[int, int, int, int] | None = None,
+) -> NDArray[np.floating]:
     """Return the means of ``factor x factor`` blocks of ``gray`` (a last partial block dropped).
 
-    Pixel ``(i, j)`` of the result is centred on ``(factor j + (factor - 1) / 2, factor i +
-    (factor - 1) / 2)`` of ``gray``; float32 stays float32 (summed in float32), other dtypes
-    give float64.
+    ``region`` ``(y0, y1, x0, x1)``, optional: the blocks of ``gray[y0:y1, x0:x1]``, read in
+    place (a slice would be copied to be contiguous for the kernel). Pixel ``(i, j)`` of the
+    result is centred on ``(x0 + factor j + (factor - 1) / 2, y0 + factor i + (factor - 1) /
+    2)`` of ``gray``; float32 stays float32 (summed in float32), other dtypes give float64.
     """
     from imageform._kernels.checkerboard_pyramid import block_mean_numba, block_mean_numpy
 
-    height, width = gray.shape
+    y0, y1, x0, x1 = (0, gray.shape[0], 0, gray.shape[1]) if region is None else region
     kernel = block_mean_numba if use_numba(gray) else block_mean_numpy
-    return kernel(gray, factor, 0, height, 0, width)
+    return kernel(gray, factor, y0, y1, x0, x1)
 
 
 def refine_symmetric_pyramid(
@@ -596,10 +601,7 @@ def refine_symmetric_pyramid(
     y0 = max(0, int(np.floor(start[idx, 1].min() - pad)))
     x1 = min(width, int(np.ceil(start[idx, 0].max() + pad)) + 1)
     y1 = min(height, int(np.ceil(start[idx, 1].max() + pad)) + 1)
-    from imageform._kernels.checkerboard_pyramid import block_mean_numba, block_mean_numpy
-
-    # read in place (a slice would be copied to be contiguous for the kernel)
-    small = (block_mean_numba if use_numba(gray) else block_mean_numpy)(gray, f, y0, y1, x0, x1)
+    small = block_mean(gray, f, (y0, y1, x0, x1))
     off = np.array([x0 + 0.5 * (f - 1), y0 + 0.5 * (f - 1)])
     hc = max(2, round(h / f))
     coarse, c_status = refine_symmetric(
