@@ -33,6 +33,7 @@ from imageform.errors import InvalidInputError, UnknownOptionError
 
 __all__ = [
     "DEFAULT_MAX_MEMORY",
+    "INTEGER_SCALE",
     "MAX_COLOR_MAGNITUDE",
     "MAX_MAGNITUDE",
     "MAX_MEAN_ELECTRONS",
@@ -671,7 +672,8 @@ def check_positive(value: object, name: str, *, allow_zero: bool = False) -> flo
     return as_real(value, name, positive=not allow_zero, nonnegative=allow_zero)
 
 
-_INTEGER_SCALE = {"uint8": 255.0, "uint16": 65535.0}
+#: The integer sample types :func:`as_image` takes, by dtype name, and their full scale.
+INTEGER_SCALE = {"uint8": 255.0, "uint16": 65535.0}
 
 
 def _check_image_block(a: Any, name: str, finite: bool, range_check: bool) -> Any:
@@ -736,12 +738,12 @@ def as_image(
         dt = arr.dtype
     if xp.isdtype(dt, "integral") or xp.isdtype(dt, "bool"):
         dname = str(dt).removeprefix("torch.")
-        if dname not in _INTEGER_SCALE:
+        if dname not in INTEGER_SCALE:
             raise InvalidInputError(
                 f"expected {name} as uint8, uint16 or floats in [0, 1], got dtype {dname}; "
                 "integer images other than uint8/uint16 have no known full range"
             )
-        arr = xp.astype(arr, getattr(xp, IMAGE_INTEGER_DTYPE)) / _INTEGER_SCALE[dname]
+        arr = xp.astype(arr, getattr(xp, IMAGE_INTEGER_DTYPE)) / INTEGER_SCALE[dname]
     else:
         arr = xp.astype(arr, float_dtype(arr, xp), copy=False)
         if is_dask_namespace(xp):

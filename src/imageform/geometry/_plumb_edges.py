@@ -13,7 +13,7 @@ import numpy as np
 
 from imageform._colormath import luma_601
 from imageform._typing import ArrayLike, FloatArray
-from imageform._validate import _INTEGER_SCALE, as_image
+from imageform._validate import INTEGER_SCALE, as_image
 from imageform.errors import InvalidInputError
 
 __all__ = ["contours", "edge_points", "grey", "grey_levels"]
@@ -62,8 +62,8 @@ def grey_levels(image: ArrayLike) -> FloatArray | None:
         arr = arr[..., 0]
     if not (arr.ndim == 2 or (arr.ndim == 3 and arr.shape[-1] == 3)):
         return None
-    if str(arr.dtype) in _INTEGER_SCALE:  # as as_image names them (not a byte-swapped one)
-        full = _INTEGER_SCALE[str(arr.dtype)]
+    if str(arr.dtype) in INTEGER_SCALE:  # as as_image names them (not a byte-swapped one)
+        full = INTEGER_SCALE[str(arr.dtype)]
     elif np.issubdtype(arr.dtype, np.floating):
         full = 1.0
     else:
