@@ -140,8 +140,8 @@ _VERT_WAVES = 0.25
 _WAVE_LINES = 8
 _WAVE_COVER = 0.15
 #: A low-contrast photograph (haze, fog, dim): a grey level spanning less than this between
-#: these percentiles is stretched to the full range (:func:`_stretch_low_contrast`; 64 of
-#: 255, the vanishing points' stretch, ``imageform.geometry.lsd``).
+#: these percentiles is stretched to span ``_STRETCH_TO`` (:func:`_stretch_low_contrast`;
+#: the vanishing points' stretch, ``imageform.geometry.lsd``, takes 64 of 255).
 _STRETCH_PERCENTILES = (1.0, 99.0)
 _STRETCH_RANGE = 0.25
 #: ... to span this (the median span of the tuning photographs, 0.81, whose contrast the
@@ -214,14 +214,14 @@ def _prepare(image: ArrayLike) -> tuple[np.ndarray, float, float]:
 
 
 def _stretch_low_contrast(a: np.ndarray) -> tuple[np.ndarray, float]:
-    """Return a low-contrast working image stretched to the full range; others as they are.
+    """Return a low-contrast working image stretched to span ``_STRETCH_TO``; others as they are.
 
     The acceptance thresholds (``_SAME``, ``_TEX_ABOVE``, ``_SMOOTH``, the edge floor) are in
     image values, set on photographs of normal contrast; haze, fog, a dim exposure or a
     washed-out print shrink every colour difference with the scene's range. Where the grey
     level (the channels' mean) spans less than ``_STRETCH_RANGE`` between its
-    ``_STRETCH_PERCENTILES`` ``lo`` and ``hi``, the image is mapped affinely,
-    ``(a - lo) / (hi - lo)`` (every channel, not clipped), as
+    ``_STRETCH_PERCENTILES`` ``lo`` and ``hi``, the image is mapped affinely, ``[lo, hi]``
+    to ``[0.1, 0.9]`` (every channel, not clipped), as
     :func:`imageform.geometry.lsd._stretch_low_contrast` does for the vanishing points;
     otherwise (normal contrast, or flat) ``a`` itself is returned and the answer is
     bit-identical. Returns the image and the gain, ``_STRETCH_TO / (hi - lo)`` or 1: the
