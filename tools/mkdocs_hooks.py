@@ -103,6 +103,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "gpr": "benchmarks/check_gpr.py",
     "horizon-natural": "benchmarks/check_horizon_natural.py",
     "horizon-stress": "benchmarks/check_horizon_stress.py",
+    "still-mask": "benchmarks/check_still_mask.py",
     "local-homography": "benchmarks/check_local_homography.py",
     "lsd": "benchmarks/bench_lsd.py",
     "locus": "benchmarks/bench_locus.py",

@@ -308,6 +308,7 @@ EXCLUDED: dict[str, str] = {
     "refine_corners_symmetric": "checkerboard corner refinement, NumPy-only by design",
     "detect_features": "image detector (OpenCV's SIFT), NumPy-only by design",
     "field_of_view_mask": "a mask from a video's frames (OpenCV components), NumPy-only",
+    "still_mask": "a keypoint mask from a video's frames (OpenCV morphology), NumPy-only",
     "highlight_mask": "a keypoint mask of one frame (OpenCV dilation), NumPy-only",
     "frame_sharpness": "a scalar per video frame (OpenCV Laplacian on the host), NumPy-only",
     "blurred_frames": "a frame selection from frame_sharpness's scalars, NumPy-only",

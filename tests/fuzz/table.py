@@ -1802,6 +1802,9 @@ VALID.update(
         "imageform.geometry.field_of_view_mask": call(
             [np.pad(np.full((12, 12), 120, np.uint8), 4)] * 3, margin=1
         ),
+        "imageform.geometry.still_mask": call(
+            [np.pad(np.full((12, 12), 120, np.uint8), 4)] * 8, margin=1
+        ),
         "imageform.geometry.highlight_mask": call(np.full((8, 8, 3), 250, np.uint8)),
         "imageform.geometry.frame_sharpness": call(np.full((8, 8, 3), 120, np.uint8)),
         "imageform.geometry.blurred_frames": call([np.full((8, 8), 0.5)] * 4),

@@ -1,4 +1,5 @@
-"""field_of_view_mask and highlight_mask: an endoscope's aperture, overlays and highlights.
+"""field_of_view_mask, still_mask and highlight_mask: an endoscope's aperture, overlays and
+highlights.
 
 Synthetic frames with a known aperture, caption and highlight, and the real colonoscopy
 frames of tests/data/endo (C3VD v3, CC BY 4.0; README there)."""
@@ -12,7 +13,12 @@ import numpy as np
 import pytest
 
 from imageform.errors import InvalidInputError
-from imageform.geometry import detect_features, field_of_view_mask, highlight_mask
+from imageform.geometry import (
+    detect_features,
+    field_of_view_mask,
+    highlight_mask,
+    still_mask,
+)
 
 cv2 = pytest.importorskip("cv2")
 
@@ -136,6 +142,74 @@ def test_highlights() -> None:
     assert 0.001 < float(np.mean(shares)) < 0.02
 
 
+def _jpeg(frame: np.ndarray, quality: int) -> np.ndarray:
+    ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, quality])
+    assert ok
+    return np.asarray(cv2.imdecode(buf, cv2.IMREAD_UNCHANGED))
+
+
+def test_overlay_mask_finds_the_caption_the_corner_text_and_the_rim() -> None:
+    frames, aperture, caption = _scope_video(10)
+    m = still_mask(frames, margin=0)
+    assert m.dtype == bool and m.shape == aperture.shape
+    # the caption's stripes (edges) and the corner's text's outline, the aperture's rim
+    assert m[caption].mean() > 0.5
+    assert m[2:10, 2:41].any()
+    # the black just outside the aperture (its inside moves with the texture)
+    rim = ~aperture & (cv2.dilate(aperture.astype(np.uint8), np.ones((3, 3))) > 0)
+    assert m[rim].mean() > 0.5
+    # nothing of the moving texture away from them
+    far = cv2.dilate((m | ~aperture).astype(np.uint8), np.ones((3, 3))) == 0
+    assert far.sum() > 0.5 * aperture.sum()
+    inner = cv2.erode(aperture.astype(np.uint8), np.ones((9, 9))) > 0
+    assert not np.any(m & inner & ~cv2.dilate(caption.astype(np.uint8), np.ones((5, 5))) > 0)
+    # the margin grows it by a disc
+    grown = still_mask(frames, margin=3)
+    assert np.array_equal(grown, cv2.dilate(m.astype(np.uint8), _disc(3)) > 0)
+
+
+def _disc(r: int) -> np.ndarray:
+    yy, xx = np.mgrid[-r : r + 1, -r : r + 1]
+    return (xx**2 + yy**2 <= r * r + r).astype(np.uint8)
+
+
+def test_overlay_mask_through_a_video_codec() -> None:
+    """The caption compressed with each frame (JPEG at quality 85): still most of it."""
+    frames, _, caption = _scope_video(10)
+    coded = [_jpeg(f, 85) for f in frames]
+    assert still_mask(coded, margin=0)[caption].mean() > 0.4
+    assert still_mask(coded, margin=0, still=0.001)[caption].mean() < 0.1
+
+
+def test_overlay_mask_says_nothing_without_motion_or_frames() -> None:
+    frames, _, _ = _scope_video(10)
+    # fewer than min_frames, or a camera that stands still (its noise alone changes it)
+    assert not still_mask(frames[:7]).any()
+    assert still_mask(frames[:7], min_frames=7).any()
+    rng = np.random.default_rng(0)
+    still = [
+        np.clip(frames[0] + rng.normal(0, s, frames[0].shape), 0, 255).astype(np.uint8)
+        for s in (3.0,) * 10
+    ]
+    assert not still_mask(still).any()
+    assert not still_mask([frames[0]] * 10).any()
+    # the real colonoscopy frames: their octagon's rim, nothing in the middle
+    endo = _endo_frames()
+    m = still_mask(endo)
+    h, w = m.shape
+    assert not m[h // 4 : 3 * h // 4, w // 4 : 3 * w // 4].any()
+
+
+def test_overlay_mask_inputs_are_untouched_and_forms_agree() -> None:
+    frames, _, _ = _scope_video(10)
+    before = [f.copy() for f in frames]
+    m = still_mask(frames)
+    assert all(np.array_equal(a, b) for a, b in zip(frames, before, strict=True))
+    assert np.array_equal(still_mask(np.stack(frames)), m)
+    assert np.array_equal(still_mask([f[..., 0] for f in frames]), m)
+    assert np.array_equal(still_mask([f / 255.0 for f in frames]), m)
+
+
 @pytest.mark.parametrize(
     ("call", "match"),
     [
@@ -148,6 +222,15 @@ def test_highlights() -> None:
         (lambda: field_of_view_mask([np.ones((9, 9))], overlays=_ONE), "overlays"),
         (lambda: field_of_view_mask([np.full((9, 9), np.nan)]), "NaN"),
         (lambda: field_of_view_mask([np.array(["a"])]), "numbers"),
+        (lambda: still_mask([]), "at least one frame"),
+        (lambda: still_mask(np.zeros((9, 9))), "list of frames"),
+        (lambda: still_mask([np.zeros((9, 9)), np.zeros((8, 9))]), "one size"),
+        (lambda: still_mask([np.ones((9, 9))] * 8, still=-1), "still"),
+        (lambda: still_mask([np.ones((9, 9))] * 8, edge=0), "edge"),
+        (lambda: still_mask([np.ones((9, 9))] * 8, margin=-1), "margin"),
+        (lambda: still_mask([np.ones((9, 9))] * 8, min_area=0), "min_area"),
+        (lambda: still_mask([np.ones((9, 9))] * 8, min_frames=2), "min_frames"),
+        (lambda: still_mask([np.full((9, 9), np.nan)] * 8), "NaN"),
         (lambda: highlight_mask(np.ones((4, 4)), value=0), "value"),
         (lambda: highlight_mask(np.ones((4, 4)), saturation=2), "saturation"),
         (lambda: highlight_mask(np.ones((4, 4)), grow=_HALF), "grow"),

@@ -351,6 +351,54 @@ def test_mask_option(
     assert "zero everywhere" in err
 
 
+def test_keep_overlays_option(
+    stand_in: tuple[Path, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The overlays are left out by default; --keep-overlays passes overlays=False."""
+    frames, camera = stand_in
+    seen: list[object] = []
+
+    def spy(images: list, K: object, distortion: object = None, **kw: object) -> Reconstruction:
+        seen.append(kw["overlays"])
+        return _fake(images, K, distortion)
+
+    monkeypatch.setattr(imageform.geometry, "reconstruct_sequence", spy)
+    cam = ["--camera", str(camera)]
+    assert main(["reconstruct", str(frames), *cam, "-o", str(tmp_path / "a")]) == 0
+    assert main(["reconstruct", str(frames), *cam, "--keep-overlays",
+                 "-o", str(tmp_path / "b")]) == 0  # fmt: skip
+    assert seen == [True, False]
+
+
+def test_burned_in_text_is_left_out_of_the_frames(
+    room: tuple[Path, Path, list], tmp_path: Path
+) -> None:
+    """Frames written with burned-in text (six lines, the same in every frame): the command
+    says how much of the frame stood still and registers the walk as without the text."""
+    import contextlib
+    import io
+
+    from imageform.io import read_image
+
+    frames, camera, _ = room
+    burned = tmp_path / "burned"
+    burned.mkdir()
+    for p in sorted(frames.iterdir()):
+        write_image(burned / p.name, sfm_scenes.burn_in(np.asarray(read_image(p))))
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        code = main(["reconstruct", str(burned), "--camera", str(camera), "--max-features",
+                     "1000", "--json", "-o", str(tmp_path / "out")])  # fmt: skip
+    assert code == 0
+    doc = json.loads(buf.getvalue())
+    said = [n for n in doc["notes"] if "stands still while the camera moves" in n]
+    assert said, doc["notes"]
+    share = float(said[0].split(" %")[0])
+    assert 20.0 < share < 60.0, said  # six lines of text across the top of 320 x 240
+    rows = _read(tmp_path / "out" / "cameras.csv")
+    assert all(r["registered"] == "1" for r in rows), doc["notes"]
+
+
 # ------------------------------------------------------------------ without a camera file
 
 

@@ -57,6 +57,7 @@ from imageform.geometry.frame_masks import (
     field_of_view_mask,
     frame_sharpness,
     highlight_mask,
+    still_mask,
 )
 from imageform.geometry.homogeneous import (
     Dehomogenized,
@@ -275,6 +276,7 @@ __all__ = [
     "stereo_calibrate",
     "stereo_disparity",
     "stereo_rectify",
+    "still_mask",
     "to_homogeneous",
     "triangulate_points",
     "triangulate_two_view",

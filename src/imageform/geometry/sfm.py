@@ -1410,6 +1410,7 @@ def reconstruct_sequence(
     refine_focal: bool = False,
     refine_distortion: bool = False,
     equalize: bool = False,
+    overlays: bool = True,
 ) -> Reconstruction:
     r"""Reconstruct the cameras and a sparse point cloud from an ordered image sequence.
 
@@ -1501,6 +1502,16 @@ def reconstruct_sequence(
         but poses that move against a run without it (no truth says which is nearer) and,
         without a camera, a focal length the frames do not fix: with a camera given,
         checked against a run without it.
+    overlays : bool
+        Leave out the keypoints on what stands still in the image while the camera moves
+        (:func:`imageform.geometry.still_mask`: burned-in text, an icon, an aperture's
+        rim, grown by 8 px) when no ``masks`` are given (given, they say where keypoints
+        may be; :func:`field_of_view_mask` takes the overlays out of an endoscope's
+        aperture). A keypoint there matches the same place in every frame, and a frame
+        of another scene that carries the same overlay matches the sequence there only
+        (its letters match along the text's lines: a translation an essential matrix
+        fits). A note says how much of the frame was left out. Nothing is left out where
+        nothing stands still, from fewer than 8 frames, or where the camera did not move.
 
     Returns
     -------
@@ -1529,6 +1540,7 @@ def reconstruct_sequence(
         "masks": masks,
         "contrast_threshold": contrast_threshold,
         "equalize": as_bool(equalize, "equalize"),
+        "overlays": as_bool(overlays, "overlays"),
         "refine_focal": refine_focal,
         "refine_distortion": refine_distortion,
         # refused before the keypoints: a lens it cannot refine
@@ -2078,6 +2090,7 @@ def _reconstruct(
     contrast_threshold: float,
     cache: dict[str, Any],
     equalize: bool = False,
+    overlays: bool = False,
     starts: frozenset[int] | None,
     refine_focal: bool = False,
     refine_distortion: bool = False,
@@ -2113,6 +2126,13 @@ def _reconstruct(
     else:
         one = _as_mask(masks, shape, "masks")
         per_frame = [one] * n
+    if overlays and masks is None and "overlay" not in cache:
+        from imageform.geometry.frame_masks import still_mask
+
+        cache["overlay"] = still_mask(images)
+    still = cache.get("overlay") if overlays and masks is None else None
+    if still is not None and still.any():  # no masks given: one for every frame
+        per_frame = [np.where(still, 0, 255).astype(np.uint8)] * n
     if "feats" not in cache:
         cache["feats"] = [
             detect_features(
@@ -2136,6 +2156,11 @@ def _reconstruct(
     all_A = np.concatenate(lin)
     all_mag = _magnification(all_A)
     notes: list[str] = []
+    if still is not None and still.any():
+        notes.append(
+            f"{100 * float(np.mean(still)):.1f} % of the frame stands still while the camera "
+            "moves (an overlay, an aperture's rim: still_mask): no keypoints there"
+        )
     textured = [len(feat) for feat in feats]
     if max(textured) < 50:
         raise InvalidInputError(

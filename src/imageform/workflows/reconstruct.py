@@ -117,6 +117,11 @@ class ReconstructOptions(Options):
         help="Find where keypoints may be from the frames: an endoscope's aperture without "
         "its black border and burned-in overlays, and a margin off its edge.",
     )
+    keep_overlays: bool = option(
+        False,
+        help="Keep the keypoints on what stands still while the camera moves (burned-in "
+        "text, an icon, an aperture's rim), which are left out by default from 8 frames on.",
+    )
     highlights: bool = option(
         False,
         help="Keep keypoints off the specular highlights (bright, nearly white pixels) of "
@@ -460,6 +465,7 @@ def reconstruct(run: Run, opts: ReconstructOptions, *, out: Path, frames: str) -
             refine_focal=refine,
             equalize=opts.equalize,
             refine_distortion=refine_lens,
+            overlays=not opts.keep_overlays,
         )
     except DegenerateConfigurationError as exc:
         raise DegenerateConfigurationError(f"{frames}: {exc}{_hint(opts)}") from exc
