@@ -26,6 +26,11 @@ a video would (JPEG at quality 95, 85, 75, or none):
   default mask (margin 8) leaves out; and of those 12 px or more from it, the share left
   out (scene lost).
 
+Then :func:`imageform.geometry.field_of_view_mask` (``--auto-mask``) on 10 frames of two
+scenes: the share of the overlay's keypoints and of the scene's (as above) it leaves out,
+with its default 8 px margin (the scene's share is the frame's border); ``--fov-only``
+prints that table alone (to compare two source trees).
+
 Then :func:`imageform.geometry.reconstruct_sequence` on 8 frames of the walk with the
 overlay and two Kodak photographs (3 and 20) carrying it too, with the default
 ``overlays=True`` and with ``overlays=False``: which photographs are registered, and the
@@ -137,6 +142,37 @@ def masks_table(data: Path) -> list[str]:
     return rows
 
 
+def fov_table(data: Path) -> list[str]:
+    """``field_of_view_mask`` (``--auto-mask``) on 10 frames of the walk with an overlay."""
+    from imageform.geometry import field_of_view_mask
+
+    rows = [
+        "| scene | overlay | JPEG | overlay keypoints out | scene keypoints out |",
+        "|---|---|---:|---:|---:|",
+    ]
+    for name in ("walk", "kodak-b"):
+        ids = SETS[name]
+        photos = None if ids is None else [kodak(data, i) for i in ids]
+        walk, _ = sfm_scenes.sequence(K, 10, SIZE, photos=photos)
+        for ov in ("tune", "banner", "logo"):
+            drawn = [OVERLAYS[ov](f, i) for i, f in enumerate(walk)]
+            changed = [np.any(d != f, axis=2) for d, f in zip(drawn, walk, strict=True)]
+            anywhere = np.any(changed, axis=0).astype(np.uint8)
+            on = cv2.dilate(anywhere, np.ones((5, 5))) > 0
+            off = cv2.dilate(anywhere, np.ones((25, 25))) == 0
+            for q in (None, 85, 75):
+                frames = [jpeg(d, q) for d in drawn]
+                keep = field_of_view_mask(frames)
+                xy = np.round(detect_features(frames[0], max_features=2000).xy).astype(int)
+                gone = ~keep[xy[:, 1], xy[:, 0]]
+                k_on, k_off = on[xy[:, 1], xy[:, 0]], off[xy[:, 1], xy[:, 0]]
+                rows.append(
+                    f"| {name} | {ov} | {q or 'none'} | {gone[k_on].mean():.3f} of "
+                    f"{int(k_on.sum())} | {gone[k_off].mean():.3f} of {int(k_off.sum())} |"
+                )
+    return rows
+
+
 def sfm_table(data: Path) -> list[str]:
     rows = [
         "| overlay | JPEG | overlays | photographs registered | true frames registered | s |",
@@ -161,12 +197,18 @@ def sfm_table(data: Path) -> list[str]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=Path("../shared/data"))
+    ap.add_argument("--fov-only", action="store_true", help="only field_of_view_mask's table")
     args = ap.parse_args()
+    if args.fov_only:
+        print("\n".join(fov_table(args.data)))
+        return
     print(f"# still_mask on overlays, {time.strftime('%Y-%m-%d')}\n")
     cmd = "OPENBLAS_NUM_THREADS=1 PYTHONPATH=src:. python -m benchmarks.check_still_mask"
     print(f"Command: `{cmd}`\n")
     print("## The mask\n")
     print("\n".join(masks_table(args.data)))
+    print("\n## field_of_view_mask (--auto-mask), 10 frames\n")
+    print("\n".join(fov_table(args.data)))
     print("\n## Structure from motion with two photographs carrying the overlay\n")
     print("\n".join(sfm_table(args.data)))
 

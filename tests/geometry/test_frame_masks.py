@@ -173,6 +173,23 @@ def _disc(r: int) -> np.ndarray:
     return (xx**2 + yy**2 <= r * r + r).astype(np.uint8)
 
 
+def test_field_of_view_mask_takes_out_a_caption_compressed_with_the_video() -> None:
+    """JPEG at quality 75 moves the caption's pixels by more than ``still`` (0.004): the
+    old rule alone keeps most of its edges; still_mask's regions inside the aperture go."""
+    frames, _, caption = _scope_video(10)
+    coded = [_jpeg(f, 75) for f in frames]
+    grey = np.asarray(coded[0], np.float32).mean(axis=2) / 255
+    box = np.ones((3, 3), np.uint8)
+    edges = caption & ((cv2.dilate(grey, box) - cv2.erode(grey, box)) >= 0.1)
+    assert edges.sum() > 50
+    kept = field_of_view_mask(coded, margin=0)
+    assert kept[edges].mean() < 0.3
+    assert kept[60, 40] and kept[20, 80]  # the scene stays
+    # fewer than 8 frames: the old rule alone, as before
+    old_rule = field_of_view_mask(coded[:7], margin=0)
+    assert old_rule[edges].mean() > 0.5
+
+
 def test_overlay_mask_through_a_video_codec() -> None:
     """The caption compressed with each frame (JPEG at quality 85): still most of it."""
     frames, _, caption = _scope_video(10)

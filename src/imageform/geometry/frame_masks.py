@@ -82,10 +82,12 @@ def field_of_view_mask(
     change, :math:`\operatorname{std}_t I(x, t) < \text{still}` on the [0, 1] scale
     (burned-in text, an icon, a clock: what moves with the camera moves in the image),
     are taken out too, unless they are half the aperture or more (a camera that did not
-    move: nothing to tell the overlays by). The region is then eroded by a disc of radius
-    ``margin`` pixels: SIFT's descriptor of a keypoint near the edge sees the edge, which
-    stands still while the tissue moves (Lowe 2004, IJCV 60(2), sec. 6.1: the descriptor
-    window is 16 x 16 samples at the keypoint's scale).
+    move: nothing to tell the overlays by); and so are the overlays :func:`still_mask` finds
+    3 px or more inside the aperture (from 8 frames on: a caption compressed with the
+    video changes by the codec's noise, more than ``still``). The region is then eroded by
+    a disc of radius ``margin`` pixels: SIFT's descriptor of a keypoint near the edge sees
+    the edge, which stands still while the tissue moves (Lowe 2004, IJCV 60(2), sec. 6.1:
+    the descriptor window is 16 x 16 samples at the keypoint's scale).
 
     Parameters
     ----------
@@ -177,6 +179,10 @@ def field_of_view_mask(
         fixed = inside & (stack.std(axis=0) < st)
         if fixed.sum() < 0.5 * inside.sum():
             keep &= ~fixed
+        # a caption compressed with the video changes by the codec's noise: still_mask's
+        # edges that stand still, 3 px or more inside the aperture (its rim is out already)
+        core = cv2.erode(inside.astype(np.uint8), _disc(3), borderValue=0) > 0
+        keep &= ~(still_mask(frames, margin=0) & core)
     if r:
         # erode: a pixel stays when no pixel out of ``keep`` lies within the disc
         keep = cv2.erode(keep.astype(np.uint8), _disc(r), borderValue=0) > 0
