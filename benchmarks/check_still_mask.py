@@ -102,9 +102,9 @@ def kodak(data: Path, i: int) -> np.ndarray:
 
 def masks_table(data: Path) -> list[str]:
     rows = [
-        "| scene | overlay | frames | JPEG | found | false px | overlay keypoints out "
+        "| scene | overlay | frames | JPEG | found | false px | still px | overlay keypoints out "
         "| scene keypoints out |",
-        "|---|---|---:|---:|---:|---:|---:|---:|",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for name, ids in SETS.items():
         photos = None if ids is None else [kodak(data, i) for i in ids]
@@ -136,7 +136,8 @@ def masks_table(data: Path) -> list[str]:
                     k_on = f"{gone[kp_on].mean():.3f} of {int(kp_on.sum())}" if kp_on.any() else ""
                     k_off = f"{gone[kp_off].mean():.3f} of {int(kp_off.sum())}"
                     rows.append(
-                        f"| {name} | {ov} | {n} | {q or 'none'} | {found} | {false} | {k_on} "
+                        f"| {name} | {ov} | {n} | {q or 'none'} | {found} | {false} "
+                        f"| {int(m.sum())} | {k_on} "
                         f"| {k_off} |"
                     )
     return rows
@@ -198,7 +199,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=Path("../shared/data"))
     ap.add_argument("--fov-only", action="store_true", help="only field_of_view_mask's table")
+    ap.add_argument("--masks-only", action="store_true", help="only the mask's table")
     args = ap.parse_args()
+    if args.masks_only:
+        print("\n".join(masks_table(args.data)))
+        return
     if args.fov_only:
         print("\n".join(fov_table(args.data)))
         return

@@ -193,6 +193,14 @@ def field_of_view_mask(
     return keep
 
 
+#: The fewest still edge pixels, all regions together, that make an overlay: a few regions
+#: of 16 to 30 pixels stand still by chance where a texture is mirrored (the room's
+#: facade at the camera's focus of expansion: 22 pixels in 8 frames of its walk at 320 x
+#: 240), an overlay's text or logo holds hundreds (325 at the least in
+#: benchmarks/results/still-mask-2026-12-03a.md's 96 runs).
+_MIN_STILL = 64
+
+
 def still_mask(
     images: Sequence[ArrayLike],
     *,
@@ -233,7 +241,9 @@ def still_mask(
     Nothing either from fewer than ``min_frames`` frames: in a few frames of a repeated
     texture (a facade's windows) some pixels stay within ``still`` by chance (a walk of
     3 to 6 rendered frames: regions of 1 000 to 57 000 pixels at ``still`` 0.02, none
-    from 8 frames on).
+    from 8 frames on), and nothing when the regions hold fewer than 64 such pixels in all
+    (a texture mirrored at the focus of expansion of a camera moving forward keeps a few
+    pixels still by chance; a caption or a logo has hundreds).
 
     Parameters
     ----------
@@ -350,7 +360,7 @@ def still_mask(
     _, labels = cv2.connectedComponents(near, connectivity=8)
     area = np.bincount(labels[cand], minlength=int(labels.max()) + 1)
     big = np.flatnonzero(area >= a_min)
-    if big.size == 0:
+    if big.size == 0 or int(area[big].sum()) < _MIN_STILL:
         return out
     out = cand & np.isin(labels, big)
     if r:

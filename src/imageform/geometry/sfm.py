@@ -2173,7 +2173,9 @@ def _reconstruct(
     # rays closer than this (radians) meet on either side of the cameras within the noise
     min_parallax = float(np.arctan(3.0 * threshold_px / min(abs(k[0, 0]), abs(k[1, 1]))))
 
-    seen = {"matches": 0, "inliers": 0}  # the best pair's counts, for the error message
+    # the best pair's counts and its essential matrix's inliers (pair, matches), for the
+    # error message when no pair is verified
+    seen: dict[str, Any] = {"matches": 0, "inliers": 0, "best": None}
 
     def stretch(*frames_kps: Any) -> float:
         """Return the undistortion's median stretch of keypoints (frame, indices, ...), >= 1.
@@ -2228,7 +2230,8 @@ def _reconstruct(
         except (DegenerateConfigurationError, InvalidInputError):
             return
         inl = epipolar_inliers(er.E, i, m[:, 0], j, m[:, 1], er.inliers)
-        seen["inliers"] = max(seen["inliers"], int(inl.sum()))
+        if int(inl.sum()) > seen["inliers"]:
+            seen["inliers"], seen["best"] = int(inl.sum()), ((i, j), m[inl])
         if inl.sum() < 30:
             return
         try:
@@ -2274,10 +2277,19 @@ def _reconstruct(
             del pair_info[key]
         cache["pairs"] = (pair_info, pair_rot, pair_dir, seen)
     if not pair_info:
+        hint = ""
+        if seen["best"] is not None and seen["inliers"] >= 30:
+            # the essential matrices fitted but no pair was kept (points behind the cameras,
+            # a rotation the loops refuse): a pan's matches fit any translation's
+            pair, m_best = seen["best"]
+            best_info = {pair: (int(m_best.shape[0]), 0.0, m_best)}
+            hint = _homography_hint(best_info, ideal, pair, threshold_px, rng)
+        why = "no pair of frames gives a pose"
+        if not hint:
+            why = "no pair of frames has 30 verified matches: too little overlap or texture"
         raise DegenerateConfigurationError(
-            "no pair of frames has 30 verified matches: too little overlap or texture "
-            f"(keypoints a frame: median {int(np.median(textured))}; the best pair: "
-            f"{seen['matches']} matches, {seen['inliers']} fit one essential matrix)"
+            f"{hint}{why} (keypoints a frame: median {int(np.median(textured))}; the best "
+            f"pair: {seen['matches']} matches, {seen['inliers']} fit one essential matrix)"
         )
     edges = np.concatenate(
         [
