@@ -148,7 +148,10 @@ PLANS: dict[str, Plan] = {
     "calibrate": Plan(child=(*_BOARD_CHILD, _CALIB_BLOCKS), here=_BOARD_HERE),
     "stereo-calibrate": Plan(child=(*_BOARD_CHILD, _CALIB_BLOCKS), here=_BOARD_HERE),
     "characterize": Plan(
-        child=(Entry("chart", "flat_gradient_numba", "(float32[:, :, ::1], float32[::1])"),)
+        child=(
+            Entry("chart", "flat_gradient_numba", "(float32[:, :, ::1], float32[::1])"),
+            Entry("chart", "lmeds_best_numba", f"({_A2}, {_A2}, {_A2}, int64[:, ::1], {_A2})"),
+        )
         + _BOARD_CHILD
         + (_CALIB_BLOCKS,),
         here=_BOARD_HERE

@@ -10,6 +10,15 @@ Each kernel has a plain NumPy/SciPy twin.
   (any input dtype, divided by ``scale``: 255 for uint8), the detector's working image.
 - :func:`region_moments_numba` / :func:`region_moments_numpy`: per label ``1..n`` of a label
   image, the pixel count and the sums of ``u, v, u², v², u v`` (``u`` the column).
+- :func:`upsample2_numba` / :func:`upsample2_numpy`: the 2x bilinear upsample of an
+  (H, W, C) float32 image that keeps pixel centres (output ``o`` samples the input at
+  ``o / 2 - 0.25``; edges replicated), weights 3/4 and 1/4 summed in float64: the values of
+  ``scipy.ndimage.zoom(img, (2, 2, 1), order=1, grid_mode=True, mode="nearest")``.
+- :func:`lmeds_best_numba` / :func:`lmeds_best_numpy`: of the 6-patch subsets of a
+  least-median-of-squares colour fit, the first whose affine fit (normal equations with a
+  1e-9 ridge) has the least median CIELAB ΔE*ab (CIE 1976) over all patches; the kernel
+  solves by Gaussian elimination with partial pivoting and leaves a subset as soon as half
+  the patches are as far as the best median so far (its median cannot be less).
 
 Serial (no ``parallel``): a megapixel is a few milliseconds. Agreement with the twins is
 tested in tests/analysis/test_chart_detect.py.
@@ -27,8 +36,12 @@ __all__ = [
     "block_mean_numpy",
     "flat_gradient_numba",
     "flat_gradient_numpy",
+    "lmeds_best_numba",
+    "lmeds_best_numpy",
     "region_moments_numba",
     "region_moments_numpy",
+    "upsample2_numba",
+    "upsample2_numpy",
 ]
 
 
@@ -159,3 +172,153 @@ def block_mean_numpy(img: NDArray[np.generic], f: int, scale: float) -> NDArray[
     h2, w2 = h // f, w // f
     a = np.asarray(img[: h2 * f, : w2 * f], dtype=np.float64)
     return a.reshape(h2, f, w2, f, nc).mean(axis=(1, 3)) / scale
+
+
+@njit(fastmath=False)
+def upsample2_numba(img: NDArray[np.float32]) -> NDArray[np.float32]:  # pragma: no cover
+    """2x bilinear upsample keeping pixel centres (see the module)."""
+    h, w, nc = img.shape
+    out = np.empty((2 * h, 2 * w, nc), dtype=np.float32)
+    for yo in range(2 * h):
+        y = yo // 2
+        y2 = max(y - 1, 0) if yo % 2 == 0 else min(y + 1, h - 1)
+        for xo in range(2 * w):
+            x = xo // 2
+            x2 = max(x - 1, 0) if xo % 2 == 0 else min(x + 1, w - 1)
+            for c in range(nc):
+                a = 0.75 * np.float64(img[y, x, c]) + 0.25 * np.float64(img[y, x2, c])
+                b = 0.75 * np.float64(img[y2, x, c]) + 0.25 * np.float64(img[y2, x2, c])
+                out[yo, xo, c] = np.float32(0.75 * a + 0.25 * b)
+    return out
+
+
+def upsample2_numpy(img: NDArray[np.float32]) -> NDArray[np.float32]:
+    """Twin of :func:`upsample2_numba`, one axis at a time."""
+    out = np.asarray(img, dtype=np.float64)
+    for axis in (0, 1):
+        a = np.moveaxis(out, axis, 0)
+        prev = np.concatenate([a[:1], a[:-1]])
+        nxt = np.concatenate([a[1:], a[-1:]])
+        up = np.empty((2 * a.shape[0], *a.shape[1:]))
+        up[0::2] = 0.75 * a + 0.25 * prev
+        up[1::2] = 0.75 * a + 0.25 * nxt
+        out = np.moveaxis(up, 0, axis)
+    return np.ascontiguousarray(out, dtype=np.float32)
+
+
+_E0 = (6.0 / 29.0) ** 3
+_E1 = 3.0 * (6.0 / 29.0) ** 2
+
+
+@njit(fastmath=False)
+def lmeds_best_numba(
+    x: NDArray[np.float64],
+    ref: NDArray[np.float64],
+    lab_ref: NDArray[np.float64],
+    sub: NDArray[np.int64],
+    to_xyz: NDArray[np.float64],
+) -> int:  # pragma: no cover - numba-compiled
+    """Index of the subset whose fit has the least median ΔE*ab over the m patches.
+
+    ``x`` (m, 4) the patches' linear colours and 1, ``ref`` (m, 3) the references' linear
+    colours, ``lab_ref`` (m, 3) their CIELAB, ``sub`` (T, k) the subsets (indices into the
+    m patches), ``to_xyz`` (3, 3) linear sRGB -> XYZ over the white (a right-hand factor).
+    """
+    n_t, k = sub.shape
+    m = x.shape[0]
+    lo, hi = (m - 1) // 2, m // 2  # the middle of the sorted errors
+    best_t, best = 0, np.inf
+    a = np.empty((4, 4))
+    b = np.empty((4, 3))
+    err = np.empty(m)
+    f = np.empty(3)
+    for t in range(n_t):
+        for i in range(4):
+            for j in range(4):
+                a[i, j] = 1e-9 if i == j else 0.0
+            for c in range(3):
+                b[i, c] = 0.0
+        for q in range(k):
+            r = sub[t, q]
+            for i in range(4):
+                for j in range(4):
+                    a[i, j] += x[r, i] * x[r, j]
+                for c in range(3):
+                    b[i, c] += x[r, i] * ref[r, c]
+        # Gaussian elimination with partial pivoting: a w = b, w (4, 3) into b
+        for col in range(4):
+            piv = col
+            for i in range(col + 1, 4):
+                if abs(a[i, col]) > abs(a[piv, col]):
+                    piv = i
+            if piv != col:
+                for j in range(4):
+                    a[col, j], a[piv, j] = a[piv, j], a[col, j]
+                for c in range(3):
+                    b[col, c], b[piv, c] = b[piv, c], b[col, c]
+            for i in range(col + 1, 4):
+                g = a[i, col] / a[col, col]
+                for j in range(col, 4):
+                    a[i, j] -= g * a[col, j]
+                for c in range(3):
+                    b[i, c] -= g * b[col, c]
+        for col in range(3, -1, -1):
+            for c in range(3):
+                s = b[col, c]
+                for j in range(col + 1, 4):
+                    s -= a[col, j] * b[j, c]
+                b[col, c] = s / a[col, col]
+        n_far = 0
+        for n in range(m):
+            p0 = x[n, 0] * b[0, 0] + x[n, 1] * b[1, 0] + x[n, 2] * b[2, 0] + x[n, 3] * b[3, 0]
+            p1 = x[n, 0] * b[0, 1] + x[n, 1] * b[1, 1] + x[n, 2] * b[2, 1] + x[n, 3] * b[3, 1]
+            p2 = x[n, 0] * b[0, 2] + x[n, 1] * b[1, 2] + x[n, 2] * b[2, 2] + x[n, 3] * b[3, 2]
+            p0 = min(max(p0, 0.0), 1.0)
+            p1 = min(max(p1, 0.0), 1.0)
+            p2 = min(max(p2, 0.0), 1.0)
+            for c in range(3):
+                v = p0 * to_xyz[0, c] + p1 * to_xyz[1, c] + p2 * to_xyz[2, c]
+                f[c] = np.cbrt(v) if v > _E0 else v / _E1 + 4.0 / 29.0
+            dl = 116.0 * f[1] - 16.0 - lab_ref[n, 0]
+            da = 500.0 * (f[0] - f[1]) - lab_ref[n, 1]
+            db = 200.0 * (f[1] - f[2]) - lab_ref[n, 2]
+            e = np.sqrt(dl * dl + da * da + db * db)
+            err[n] = e
+            if e >= best:
+                n_far += 1
+                if n_far >= m - lo:  # the lower middle is >= best: so is the median
+                    break
+        if n_far >= m - lo:
+            continue
+        for i in range(1, m):  # insertion sort of the m errors
+            v = err[i]
+            j = i - 1
+            while j >= 0 and err[j] > v:
+                err[j + 1] = err[j]
+                j -= 1
+            err[j + 1] = v
+        med = (err[lo] + err[hi]) / 2.0
+        if med < best:
+            best_t, best = t, med
+    return best_t
+
+
+def lmeds_best_numpy(
+    x: NDArray[np.float64],
+    ref: NDArray[np.float64],
+    lab_ref: NDArray[np.float64],
+    sub: NDArray[np.int64],
+    to_xyz: NDArray[np.float64],
+) -> int:
+    """Twin of :func:`lmeds_best_numba` with batched NumPy (LAPACK's solve), every median."""
+    xs, rs = x[sub], ref[sub]  # (T, k, 4), (T, k, 3)
+    xt = np.swapaxes(xs, 1, 2)
+    w = np.linalg.solve(xt @ xs + 1e-9 * np.eye(4), xt @ rs)  # (T, 4, 3)
+    xyz = np.clip(np.matmul(x, w), 0.0, 1.0) @ to_xyz
+    f = np.where(xyz > _E0, np.cbrt(xyz), xyz / _E1 + 4.0 / 29.0)
+    lab = np.stack(
+        [116 * f[..., 1] - 16, 500 * (f[..., 0] - f[..., 1]), 200 * (f[..., 1] - f[..., 2])],
+        axis=-1,
+    )
+    d = lab - lab_ref[None]
+    return int(np.argmin(np.median(np.sqrt((d * d).sum(axis=-1)), axis=1)))

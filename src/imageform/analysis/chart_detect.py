@@ -263,9 +263,11 @@ def _not_found(reason: str) -> ChartDetection:
 
 
 def _apply_h(h: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Points (..., 2) through the homography ``h``; inf or NaN on its vanishing line."""
     p = np.asarray(pts, dtype=np.float64)
     q = p @ h[:, :2].T + h[:, 2]
-    return q[..., :2] / q[..., 2:3]
+    with np.errstate(divide="ignore", invalid="ignore"):  # a degenerate lattice's refit
+        return q[..., :2] / q[..., 2:3]
 
 
 def _normalizer(p: np.ndarray) -> np.ndarray:
@@ -626,9 +628,11 @@ def _grow(
 
 
 def _cell_area(h: np.ndarray, keys: np.ndarray) -> np.ndarray:
-    px = _apply_h(h, keys + [0.5, 0]) - _apply_h(h, keys - [0.5, 0])
-    py = _apply_h(h, keys + [0, 0.5]) - _apply_h(h, keys - [0, 0.5])
-    return np.abs(px[:, 0] * py[:, 1] - px[:, 1] * py[:, 0])
+    """Image area of the lattice cells ``keys`` under ``h`` (NaN on its vanishing line)."""
+    with np.errstate(invalid="ignore"):
+        px = _apply_h(h, keys + [0.5, 0]) - _apply_h(h, keys - [0.5, 0])
+        py = _apply_h(h, keys + [0, 0.5]) - _apply_h(h, keys - [0, 0.5])
+        return np.abs(px[:, 0] * py[:, 1] - px[:, 1] * py[:, 0])
 
 
 # ---------------------------------------------------------------- colour check
@@ -673,17 +677,29 @@ def _sample(work: np.ndarray, h: np.ndarray, trim: bool = False) -> tuple[np.nda
     :func:`measure_chart_patches` trims pixels (a label over part of a patch is left out); a
     cell with under half its samples kept gets an infinite spread (unusable).
     """
+    return _sample_cells(work, h, _GRID.astype(np.float64), trim)
+
+
+def _sample_cells(
+    work: np.ndarray, h: np.ndarray, cells: np.ndarray, trim: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_sample` of the cells ``cells`` (n, 2) (lattice coordinates) of the map ``h``.
+
+    The samples of a cell are a square grid about its centre, the same points whichever
+    quarter turn or mirror image of the chart the cell is read in: a lattice's windows
+    share the samples of their cells (:func:`_best_window` samples each cell once).
+    """
     from scipy import ndimage
 
     offs = _OFFS_FINE if trim else _OFFS
-    pts = _apply_h(h, (_GRID[:, None, :] + offs[None, :, :]).reshape(-1, 2))
+    pts = _apply_h(h, (cells[:, None, :] + offs[None, :, :]).reshape(-1, 2))
     vals = np.stack(
         [
             ndimage.map_coordinates(work[..., ch], [pts[:, 1], pts[:, 0]], order=1, mode="nearest")
             for ch in range(3)
         ],
         axis=-1,
-    ).reshape(len(_GRID), len(offs), 3)
+    ).reshape(len(cells), len(offs), 3)
     if not trim:
         return vals.mean(axis=1), vals.std(axis=1).max(axis=1)
     keep = _clean_pixels(vals)
@@ -704,12 +720,22 @@ def _sample(work: np.ndarray, h: np.ndarray, trim: bool = False) -> tuple[np.nda
 _OUTLIER_FACTOR, _OUTLIER_DELTA_E = 4.0, 10.0
 
 
+_XYZ_WHITE: list[np.ndarray] = []
+
+
+def _xyz_white() -> np.ndarray:
+    """Linear sRGB -> XYZ over the white's XYZ, as a right-hand factor (3, 3)."""
+    if not _XYZ_WHITE:
+        from imageform.color.rgb_spaces import rgb_to_xyz_matrix
+
+        m = rgb_to_xyz_matrix("srgb")
+        _XYZ_WHITE.append((m / m.sum(axis=1)[:, None]).T.copy())
+    return _XYZ_WHITE[0]
+
+
 def _lab_from_linear(lin: np.ndarray) -> np.ndarray:
     """CIELAB (D65, the sRGB white) of linear sRGB rows (..., 3), clipped to [0, 1] first."""
-    from imageform.color.rgb_spaces import rgb_to_xyz_matrix
-
-    m = rgb_to_xyz_matrix("srgb")
-    xyz = np.clip(lin, 0.0, 1.0) @ m.T / m.sum(axis=1)
+    xyz = np.clip(lin, 0.0, 1.0) @ _xyz_white()
     f = np.where(xyz > (6 / 29) ** 3, np.cbrt(xyz), xyz / (3 * (6 / 29) ** 2) + 4 / 29)
     return np.stack(
         [116 * f[..., 1] - 16, 500 * (f[..., 0] - f[..., 1]), 200 * (f[..., 1] - f[..., 2])],
@@ -834,6 +860,19 @@ _ROBUST_BELOW = 0.95
 _LMEDS_TRIALS = 400
 
 
+_SUBSETS: dict[int, np.ndarray] = {}
+
+
+def _lmeds_subsets(m: int) -> np.ndarray:
+    """Return the least-median fit's random 6-patch subsets of ``m`` patches (T, 6)."""
+    if m not in _SUBSETS:
+        gen = np.random.default_rng(0)
+        _SUBSETS[m] = np.ascontiguousarray(
+            np.argsort(gen.random((_LMEDS_TRIALS, m)), axis=1)[:, :6]
+        )
+    return _SUBSETS[m]
+
+
 def _lmeds_fit(
     x: np.ndarray, ref_lin: np.ndarray, lab_ref: np.ndarray, usable: np.ndarray
 ) -> tuple[float, np.ndarray]:
@@ -849,14 +888,21 @@ def _lmeds_fit(
     none = np.zeros(len(x), dtype=bool)
     if len(idx) < 14:
         return -1.0, none
-    gen = np.random.default_rng(0)
-    sub = np.argsort(gen.random((_LMEDS_TRIALS, len(idx))), axis=1)[:, :6]
-    xs, rs = x[idx[sub]], ref_lin[idx[sub]]  # (T, 6, 4), (T, 6, 3)
-    xt = np.swapaxes(xs, 1, 2)
-    w = np.linalg.solve(xt @ xs + 1e-9 * np.eye(4), xt @ rs)  # (T, 4, 3)
-    d = _lab_from_linear(np.einsum("nj,tjc->tnc", x[idx], w)) - lab_ref[idx][None]
-    err = np.sqrt((d * d).sum(axis=-1))  # (T, m)
-    best = err[int(np.argmin(np.median(err, axis=1)))]
+    from imageform._kernels.chart import lmeds_best_numba
+
+    sub = _lmeds_subsets(len(idx))
+    xu = np.ascontiguousarray(x[idx])
+    t = lmeds_best_numba(
+        xu,
+        np.ascontiguousarray(ref_lin[idx]),
+        np.ascontiguousarray(lab_ref[idx]),
+        sub,
+        _xyz_white(),
+    )
+    xs, rs = xu[sub[t]], ref_lin[idx[sub[t]]]  # the best subset's fit, as the kernel's
+    w = np.linalg.solve(xs.T @ xs + 1e-9 * np.eye(4), xs.T @ rs)
+    d = _lab_from_linear(xu @ w) - lab_ref[idx]
+    best = np.sqrt((d * d).sum(axis=-1))
     bad = best > _bound(best)
     if bad.sum() > 6:
         return -1.0, none
@@ -981,12 +1027,13 @@ def _greys_descend(mean: np.ndarray, ref_lin: np.ndarray, least: float = 0.0) ->
     the colour homography with its light per patch (a shadow over part of the grey row
     scrambles its order, an inverted row is -1).
     """
-    k = np.arange(_ROWS * _COLS - _COLS, _ROWS * _COLS)
-    got = mean[k].sum(axis=1)
-    want = ref_lin[k].sum(axis=1)
-    rank_got = np.argsort(np.argsort(got, kind="stable"), kind="stable")
-    rank_want = np.argsort(np.argsort(want, kind="stable"), kind="stable")
-    return bool(np.corrcoef(rank_got, rank_want)[0, 1] > least)
+    got = mean[_ROWS * _COLS - _COLS :].sum(axis=1)
+    want = ref_lin[_ROWS * _COLS - _COLS :].sum(axis=1)
+    d = np.argsort(np.argsort(got, kind="stable"), kind="stable") - np.argsort(
+        np.argsort(want, kind="stable"), kind="stable"
+    )
+    # Spearman's rho of two rankings without ties: 1 - 6 sum d^2 / (n (n^2 - 1))
+    return bool(1.0 - 6.0 * float(d @ d) / (_COLS * (_COLS * _COLS - 1)) > least)
 
 
 def _best_window(
@@ -1008,6 +1055,7 @@ def _best_window(
     umax, vmax = keys.max(axis=0).astype(int)
     best: tuple[float, np.ndarray, np.ndarray] | None = None
     ku, kv = np.unique(keys.astype(int), axis=0).T
+    windows: list[np.ndarray] = []  # the chart -> lattice maps of the windows to score
     for quarter in range(4):
         wu, wv = (_COLS, _ROWS) if quarter % 2 == 0 else (_ROWS, _COLS)
         # every window that overlaps the lattice: one whose patches run past the lattice (a
@@ -1027,16 +1075,23 @@ def _best_window(
             if cnt < max(top - 2, 6) or (shading and cnt < _SHADING_MIN_SEGMENTED):
                 continue
             a = _turn(quarter, u0, v0) @ _MIRROR if mirror else _turn(quarter, u0, v0)
-            hc = h @ a
-            if not _plausible_view(hc):
-                continue
-            mean, spread = _sample(work, hc, trim)
-            if not _greys_descend(mean, ref_lin, -0.5 if shading else 0.0):
-                continue
-            usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
-            r2, out = _window_fit(mean, ref_lin, usable, shading, robust)
-            if best is None or r2 > best[0]:
-                best = (r2, a, out)
+            if _plausible_view(h @ a):
+                windows.append(a)
+    if not windows:
+        return None
+    # each window's cells on the lattice (a is an integer map): every cell sampled once
+    cells = np.stack([_GRID @ a[:2, :2].T + a[:2, 2] for a in windows])
+    uniq, inv = np.unique(np.rint(cells).reshape(-1, 2), axis=0, return_inverse=True)
+    cell_mean, cell_spread = _sample_cells(work, h, uniq.astype(np.float64), trim)
+    inv = inv.reshape(len(windows), len(_GRID))
+    for a, at in zip(windows, inv, strict=True):
+        mean, spread = cell_mean[at], cell_spread[at]
+        if not _greys_descend(mean, ref_lin, -0.5 if shading else 0.0):
+            continue
+        usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
+        r2, out = _window_fit(mean, ref_lin, usable, shading, robust)
+        if best is None or r2 > best[0]:
+            best = (r2, a, out)
     return best
 
 
@@ -1341,11 +1396,9 @@ def _find(
             if name == "up":
                 # small charts (patch pitch under about 12 pixels) separate better on a 2x
                 # bilinear upsample (o -> o / 2 - 0.25 in image pixels)
-                from scipy import ndimage
+                from imageform._kernels.chart import upsample2_numba
 
-                work = ndimage.zoom(
-                    stage("work")[0], (2, 2, 1), order=1, grid_mode=True, mode="nearest"
-                )
+                work = upsample2_numba(np.ascontiguousarray(stage("work")[0]))
                 scale = np.array([[0.5, 0.0, -0.25], [0.0, 0.5, -0.25], [0.0, 0.0, 1.0]])
             else:
                 work, f = _work_image(rgb, max_size if name == "work" else 2 * max_size, full)
