@@ -61,6 +61,7 @@ BENCH_SCRIPTS: dict[str, str] = {
     "chart-marks": "benchmarks/check_chart_marks.py",
     "chart-photos": "benchmarks/check_chart_photos.py",
     "chart-real": "benchmarks/check_chart_real.py",
+    "chart-shape": "benchmarks/check_chart_shape.py",
     "chart-speed": "benchmarks/check_chart_speed.py",
     "chart-third": "benchmarks/check_chart_real.py",
     "board-fresh": "benchmarks/check_board_fresh.py",

@@ -266,6 +266,39 @@ def test_no_numpy_warnings_from_a_photograph_with_degenerate_lattices(shared_dat
     assert not det.found
 
 
+def _off_reference(seed: int) -> np.ndarray:
+    """The Classic's colours with its 18 colour patches moved (a chart printed off them)."""
+    ref = np.asarray(COLORCHECKER_SRGB8, float) / 255
+    gen = np.random.default_rng(seed)
+    ref[:18] = np.clip(ref[:18] + gen.normal(0, 0.2, (18, 3)), 0, 1)
+    return ref
+
+
+@pytest.mark.parametrize("seed", [3, 6, 9])
+def test_a_whole_chart_is_found_by_its_shape_below_min_score(seed: int) -> None:
+    # against a reference its colours fit at R2 0.73-0.77 (under 0.8): every cell a flat
+    # square, nothing on the lattice around it, its orientation still in its colours
+    photo = synthetic_chart_photo(rng=1, tilt=20.0, rotation=30.0, width=0.4)
+    ref = _off_reference(seed)
+    with pytest.warns(ChartWarning, match="found by its shape"):
+        det = detect_colorchecker(photo.image, reference=ref)
+    assert det.found and 0.65 <= det.score < 0.8, det.score
+    assert np.linalg.norm(det.centers - photo.centers, axis=1).max() < 1.0
+    # the relief follows min_score: 0.15 under it
+    strict = detect_colorchecker(photo.image, reference=ref, min_score=0.95)
+    assert not strict.found and "colour fit R2" in strict.reason
+
+
+def test_a_chart_of_other_colours_is_not_found_by_its_shape() -> None:
+    # the same whole, isolated lattice against unrelated colours: its shape is not enough
+    photo = synthetic_chart_photo(rng=1, tilt=20.0, rotation=30.0, width=0.4)
+    ref = np.random.default_rng(0).uniform(0.05, 0.95, (24, 3))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ChartWarning)
+        det = detect_colorchecker(photo.image, reference=ref)
+    assert not det.found
+
+
 def test_against_colour_checker_detection(kodak: list[np.ndarray]) -> None:
     ccd = pytest.importorskip("colour_checker_detection")
     case = chart_case(kodak, 1, occlude=0)

@@ -80,7 +80,16 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    so, 0.66 plain). Steps 6 and 7 are both tried and the higher score that passes wins (a
    chart with a mark on every patch has no plain fit at all: the colour homography of a
    lattice of clutter beside it must not win by default).
-8. **A mirrored chart.** When steps 5-7 find no chart at either resolution, they are run
+8. **By its shape.** When no window passes by colour, one that is plainly a chart by its
+   shape may still be: 22 or more of its 24 cells segmented as flat squares, no flat
+   square centred on a cell of its lattice in the two cells around it (the lattice is the
+   chart, not a window of a grid of tiles or boxes), and its plain colour fit at most 0.15
+   under ``min_score`` and at least 0.15 over the same cells read half a turn round or
+   mirrored (the orientation is still in the colours). A Classic under an orange lamp,
+   one channel on the camera's shoulder, fits 0.71-0.80 so
+   (benchmarks/results/chart-shape-2026-12-03a.md); it is found with a
+   :class:`~imageform.analysis.ChartWarning`.
+9. **A mirrored chart.** When steps 5-8 find no chart at either resolution, they are run
    once more on the same candidates for a chart with its columns reversed (a webcam's
    mirrored preview, a photograph flipped left to right: 26 of 58 tuning photographs in
    benchmarks/results/chart-fresh-2026-12-01e.md, whose colours no rotation of the printed
@@ -1120,6 +1129,72 @@ def _on_lattice(
     return every
 
 
+#: A window that is the whole chart by its shape (:func:`_by_shape`) is accepted with a
+#: colour fit this much under ``min_score``: a strong cast on a camera's tone curve (one
+#: channel near its shoulder) leaves an affine fit R² 0.71-0.80 on a Classic under an
+#: orange lamp (the risk_input1 photographs of chart-fresh-2026-12-01e.md), while the
+#: best window of the photographs without a Classic in the tuning and held-out sets
+#: (another 4 x 6 chart, a SpyderCHECKR 24, included) scores 0.64 at most.
+_SHAPE_RELIEF = 0.15
+#: ... when at least this many of its 24 cells are segmented flat squares on the lattice
+#: and no candidate lies on the lattice outside it (the lattice is the chart, no more) ...
+_SHAPE_SEGMENTED = 22
+#: ... and its colours read it better than the same cells read turned half a turn or
+#: mirrored, by this much R² (the orientation is in the colours).
+_SHAPE_MARGIN = 0.15
+
+#: The chart's symmetries that keep its 4 x 6 outline: a half turn and the two mirrors.
+_SYMMETRIES = (
+    np.array([[-1.0, 0.0, _COLS - 1], [0.0, -1.0, _ROWS - 1], [0.0, 0.0, 1.0]]),
+    np.array([[-1.0, 0.0, _COLS - 1], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]),
+    np.array([[1.0, 0.0, 0.0], [0.0, -1.0, _ROWS - 1], [0.0, 0.0, 1.0]]),
+)
+
+
+def _by_shape(
+    work: np.ndarray,
+    cand: dict[str, np.ndarray],
+    ref_lin: np.ndarray,
+    plain: list[
+        tuple[tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+    ],
+    least: float,
+) -> tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """Return the best window that is a whole chart by its shape, its fit ``least`` or more.
+
+    Of the lattices' best plain windows (as :func:`_search` found them, best first): at
+    least ``_SHAPE_SEGMENTED`` of its cells segmented, no candidate centred (within 0.15
+    pitch) on a cell of its lattice in the two cells around it (an isolated 4 x 6 block of
+    flat squares: not a tiled wall, not a window of a larger grid; candidates farther off
+    or between cells are clutter), and its colour fit at least ``_SHAPE_MARGIN`` over the
+    same cells read in the chart's other orientations of that outline (half a turn, either
+    mirror image). None when no window is such.
+    """
+    for win, every in sorted(plain, key=lambda item: -item[0][0]):
+        r2, h, a, _, keys, _ = win
+        if r2 < least:
+            break
+        chart = np.round(_apply_h(np.linalg.inv(a), keys))
+        inside = np.all((chart >= 0) & (chart <= [_COLS - 1, _ROWS - 1]), axis=1)
+        if len({(int(u), int(v)) for u, v in chart[inside]}) < _SHAPE_SEGMENTED:
+            continue
+        hc = h @ a
+        on = _apply_h(np.linalg.inv(hc), cand["c"][every])
+        beside = np.all((on > -2.5) & (on < [_COLS + 1.5, _ROWS + 1.5]), axis=1)
+        beside &= np.all(np.abs(on - np.round(on)) < 0.15, axis=1)  # on a cell, not clutter
+        if not np.all((on[beside] > -0.5) & (on[beside] < [_COLS - 0.5, _ROWS - 0.5])):
+            continue  # the lattice goes on beside the window: a grid, not a chart
+        others = [-1.0]
+        for sym in _SYMMETRIES:
+            mean, spread = _sample(work, hc @ sym)
+            if _greys_descend(mean, ref_lin):
+                usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
+                others.append(_colour_fit(mean, ref_lin, usable)[0])
+        if r2 - max(others) >= _SHAPE_MARGIN:
+            return win
+    return None
+
+
 def _search(
     work: np.ndarray,
     ref_lin: np.ndarray,
@@ -1144,6 +1219,10 @@ def _search(
     tried: set[int] = set()
     best: tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
     lattices: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    # each lattice's best plain window and every candidate on the lattice (the shape rule)
+    plain: list[
+        tuple[tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+    ] = []
     attempts = grown_n = 0
     for hyp in order:
         if score[hyp] < 6 or attempts >= _ATTEMPTS or grown_n >= _GROWN:
@@ -1174,6 +1253,8 @@ def _search(
         r2, a, out = win
         if best is None or r2 > best[0]:
             best = (r2, h, a, idx, keys, out)
+        if not texture:
+            plain.append(((r2, h, a, idx, keys, out), every))
         if r2 > 0.97:
             break
     if best is None:
@@ -1205,10 +1286,13 @@ def _search(
         elif shaded is not None and s_shaded > -np.inf:
             best, shading = shaded, True
         else:
-            why = f"best candidate's colour fit R2 = {best[0]:.2f} < min_score = {min_score:g}"
-            if trimmed is not None:
-                why += f" (on the patches' dominant colours {trimmed[0]:.2f} < {need:g})"
-            return why
+            shaped = _by_shape(work, cand, ref_lin, plain, min_score - _SHAPE_RELIEF)
+            if shaped is None:
+                why = f"best candidate's colour fit R2 = {best[0]:.2f} < min_score = {min_score:g}"
+                if trimmed is not None:
+                    why += f" (on the patches' dominant colours {trimmed[0]:.2f} < {need:g})"
+                return why
+            best = shaped
     r2, h, a, idx, keys, out = best
     # chart coordinates of the matched candidates, refit chart -> work directly
     chart_xy = _apply_h(np.linalg.inv(a), keys)
@@ -1259,7 +1343,11 @@ def detect_colorchecker(
         speed / smallest-chart trade-off (a photograph without a chart is searched again at
         twice this size).
     min_score : float, keyword-only
-        The least :math:`R^2` of the affine colour fit that accepts a chart (0 to 1).
+        The least :math:`R^2` of the affine colour fit that accepts a chart (0 to 1); a
+        window that is a whole chart by its shape (22 or more of its cells segmented, no
+        flat square on its lattice around it, its colours reading it 0.15 better than
+        half a turn or mirrored) is accepted down to ``min_score - 0.15``, with a
+        :class:`~imageform.analysis.ChartWarning`.
     sample : float, keyword-only
         Side of the sampling square in patch pitches (the patches are about 0.85 pitch
         wide): the quads :func:`measure_chart_patches` averages.
@@ -1292,6 +1380,7 @@ def detect_colorchecker(
     ChartWarning
         The chart was found only with a light per patch (a shadow across it, or light
         falling off along it): a colour correction fitted to it is biased by the light.
+        Or it was found by its shape with a colour fit under ``min_score``.
 
     Examples
     --------
@@ -1351,6 +1440,17 @@ def detect_colorchecker(
             f"fall-off: patches at x{lo:.2f} to x{hi:.2f} of the median brightness); found by "
             f"colour up to brightness (R2 = {r2:.2f}), a colour correction fitted to it is "
             "biased by the light",
+            ChartWarning,
+            stacklevel=2,
+        )
+    if light is None and r2 < min_score:
+        import warnings
+
+        warnings.warn(
+            f"detect_colorchecker: found by its shape (a whole, isolated 4 x 6 lattice) with a "
+            f"colour fit R2 = {r2:.2f} under min_score = {min_score:g}: a strong cast on the "
+            "camera's tone curve, or a chart printed off its reference; check the patch "
+            "colours before fitting a correction to them",
             ChartWarning,
             stacklevel=2,
         )
