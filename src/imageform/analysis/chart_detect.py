@@ -1448,7 +1448,7 @@ def detect_colorchecker(
 
         warnings.warn(
             f"detect_colorchecker: found by its shape (a whole, isolated 4 x 6 lattice) with a "
-            f"colour fit R2 = {r2:.2f} under min_score = {min_score:g}: a strong cast on the "
+            f"colour fit R2 = {r2:.3f} under min_score = {min_score:g}: a strong cast on the "
             "camera's tone curve, or a chart printed off its reference; check the patch "
             "colours before fitting a correction to them",
             ChartWarning,
