@@ -289,6 +289,27 @@ def test_a_whole_chart_is_found_by_its_shape_below_min_score(seed: int) -> None:
     assert not strict.found and "colour fit R2" in strict.reason
 
 
+@pytest.mark.parametrize("seed", [3, 9])
+def test_two_charts_side_by_side_are_a_grid_not_a_chart_by_shape(seed: int) -> None:
+    # an upright chart is found by its shape (one stray square beside it is clutter); the
+    # same chart with its copy beside it, the lattice going on for 6 more columns, is not
+    photo = synthetic_chart_photo(rng=1, tilt=0.0, rotation=0.0, width=0.3)
+    ref = _off_reference(seed)
+    with pytest.warns(ChartWarning, match="found by its shape"):
+        det = detect_colorchecker(photo.image, reference=ref)
+    assert det.found and det.score < 0.8
+    assert np.linalg.norm(det.centers - photo.centers, axis=1).max() < 1.0
+    c = photo.centers
+    pitch = float(np.median(np.diff(c.reshape(4, 6, 2)[..., 0], axis=1)))
+    u0, v0 = round(c[0, 0] - 0.5 * pitch), round(c[0, 1] - 0.5 * pitch)
+    w, h = round(6 * pitch), round(4 * pitch)
+    twin = photo.image.copy()
+    twin[v0 : v0 + h, u0 - w : u0] = photo.image[v0 : v0 + h, u0 : u0 + w]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ChartWarning)
+        assert not detect_colorchecker(twin, reference=ref).found
+
+
 def test_a_chart_of_other_colours_is_not_found_by_its_shape() -> None:
     # the same whole, isolated lattice against unrelated colours: its shape is not enough
     photo = synthetic_chart_photo(rng=1, tilt=20.0, rotation=30.0, width=0.4)

@@ -81,12 +81,12 @@ segmentation detector of colour-checker-detection and OpenCV's ``mcc`` module):
    chart with a mark on every patch has no plain fit at all: the colour homography of a
    lattice of clutter beside it must not win by default).
 8. **By its shape.** When no window passes by colour, one that is plainly a chart by its
-   shape may still be: 22 or more of its 24 cells segmented as flat squares, no flat
-   square centred on a cell of its lattice in the two cells around it (the lattice is the
-   chart, not a window of a grid of tiles or boxes), and its plain colour fit at most 0.15
-   under ``min_score`` and at least 0.15 over the same cells read half a turn round or
-   mirrored (the orientation is still in the colours). A Classic under an orange lamp,
-   one channel on the camera's shoulder, fits 0.71-0.80 so
+   shape may still be: 22 or more of its 24 cells segmented as flat squares, at most one
+   flat square centred on a cell of its lattice in the two cells around it (the lattice is
+   the chart, not a window of a grid of tiles or boxes; one is a stray), and its plain
+   colour fit at most 0.15 under ``min_score`` and at least 0.15 over the same cells read
+   half a turn round or mirrored (the orientation is still in the colours). A Classic
+   under an orange lamp, one channel on the camera's shoulder, fits 0.71-0.80 so
    (benchmarks/results/chart-shape-2026-12-03a.md); it is found with a
    :class:`~imageform.analysis.ChartWarning`.
 9. **A mirrored chart.** When steps 5-8 find no chart at either resolution, they are run
@@ -1139,6 +1139,9 @@ _SHAPE_RELIEF = 0.15
 #: ... when at least this many of its 24 cells are segmented flat squares on the lattice
 #: and no candidate lies on the lattice outside it (the lattice is the chart, no more) ...
 _SHAPE_SEGMENTED = 22
+#: ... (fewer than this many flat squares centred on cells of its lattice in the two cells
+#: around it: a grid of tiles or boxes puts a row of them there, one is a stray) ...
+_SHAPE_BESIDE = 2
 #: ... and its colours read it better than the same cells read turned half a turn or
 #: mirrored, by this much R² (the orientation is in the colours).
 _SHAPE_MARGIN = 0.15
@@ -1163,12 +1166,13 @@ def _by_shape(
     """Return the best window that is a whole chart by its shape, its fit ``least`` or more.
 
     Of the lattices' best plain windows (as :func:`_search` found them, best first): at
-    least ``_SHAPE_SEGMENTED`` of its cells segmented, no candidate centred (within 0.15
-    pitch) on a cell of its lattice in the two cells around it (an isolated 4 x 6 block of
-    flat squares: not a tiled wall, not a window of a larger grid; candidates farther off
-    or between cells are clutter), and its colour fit at least ``_SHAPE_MARGIN`` over the
-    same cells read in the chart's other orientations of that outline (half a turn, either
-    mirror image). None when no window is such.
+    least ``_SHAPE_SEGMENTED`` of its cells segmented, fewer than ``_SHAPE_BESIDE``
+    candidates centred (within 0.15 pitch) on cells of its lattice in the two cells around
+    it (an isolated 4 x 6 block of flat squares: not a tiled wall, not a window of a larger
+    grid; candidates farther off or between cells, and a single stray, are clutter), and
+    its colour fit at least ``_SHAPE_MARGIN`` over the same cells read in the chart's
+    other orientations of that outline (half a turn, either mirror image). None when no
+    window is such.
     """
     for win, every in sorted(plain, key=lambda item: -item[0][0]):
         r2, h, a, _, keys, _ = win
@@ -1182,7 +1186,8 @@ def _by_shape(
         on = _apply_h(np.linalg.inv(hc), cand["c"][every])
         beside = np.all((on > -2.5) & (on < [_COLS + 1.5, _ROWS + 1.5]), axis=1)
         beside &= np.all(np.abs(on - np.round(on)) < 0.15, axis=1)  # on a cell, not clutter
-        if not np.all((on[beside] > -0.5) & (on[beside] < [_COLS - 0.5, _ROWS - 0.5])):
+        out = ~np.all((on[beside] > -0.5) & (on[beside] < [_COLS - 0.5, _ROWS - 0.5]), axis=1)
+        if int(out.sum()) >= _SHAPE_BESIDE:
             continue  # the lattice goes on beside the window: a grid, not a chart
         others = [-1.0]
         for sym in _SYMMETRIES:
@@ -1344,8 +1349,8 @@ def detect_colorchecker(
         twice this size).
     min_score : float, keyword-only
         The least :math:`R^2` of the affine colour fit that accepts a chart (0 to 1); a
-        window that is a whole chart by its shape (22 or more of its cells segmented, no
-        flat square on its lattice around it, its colours reading it 0.15 better than
+        window that is a whole chart by its shape (22 or more of its cells segmented, at
+        most one flat square on its lattice around it, its colours reading it 0.15 better than
         half a turn or mirrored) is accepted down to ``min_score - 0.15``, with a
         :class:`~imageform.analysis.ChartWarning`.
     sample : float, keyword-only
