@@ -1023,6 +1023,11 @@ def _plausible_view(hc: np.ndarray) -> bool:
     return bool(area.min() > 0 and area.max() <= _MAX_AREA_RATIO * area.min())
 
 
+def _usable(mean: np.ndarray, spread: np.ndarray) -> np.ndarray:
+    """Which sampled cells a colour fit may use: flat (spread under 0.08), not clipped."""
+    return np.asarray((spread < 0.08) & (mean.max(axis=1) < 0.98))
+
+
 def _greys_descend(mean: np.ndarray, ref_lin: np.ndarray, least: float = 0.0) -> bool:
     """Whether the window's neutral row is brighter where the reference's is (rank order).
 
@@ -1097,7 +1102,7 @@ def _best_window(
         mean, spread = cell_mean[at], cell_spread[at]
         if not _greys_descend(mean, ref_lin, -0.5 if shading else 0.0):
             continue
-        usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
+        usable = _usable(mean, spread)
         r2, out = _window_fit(mean, ref_lin, usable, shading, robust)
         if best is None or r2 > best[0]:
             best = (r2, a, out)
@@ -1136,8 +1141,7 @@ def _on_lattice(
 #: best window of the photographs without a Classic in the tuning and held-out sets
 #: (another 4 x 6 chart, a SpyderCHECKR 24, included) scores 0.64 at most.
 _SHAPE_RELIEF = 0.15
-#: ... when at least this many of its 24 cells are segmented flat squares on the lattice
-#: and no candidate lies on the lattice outside it (the lattice is the chart, no more) ...
+#: ... when at least this many of its 24 cells are segmented flat squares on the lattice ...
 _SHAPE_SEGMENTED = 22
 #: ... (fewer than this many flat squares centred on cells of its lattice in the two cells
 #: around it: a grid of tiles or boxes puts a row of them there, one is a stray) ...
@@ -1193,7 +1197,7 @@ def _by_shape(
         for sym in _SYMMETRIES:
             mean, spread = _sample(work, hc @ sym)
             if _greys_descend(mean, ref_lin):
-                usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
+                usable = _usable(mean, spread)
                 others.append(_colour_fit(mean, ref_lin, usable)[0])
         if r2 - max(others) >= _SHAPE_MARGIN:
             return win
@@ -1308,7 +1312,7 @@ def _search(
         hc = h @ a
     # the score and the outliers again, sampled through the refitted homography
     mean, spread = _sample(work, hc, trim)
-    usable = (spread < 0.08) & (mean.max(axis=1) < 0.98)
+    usable = _usable(mean, spread)
     r2_final, out_final = _window_fit(mean, ref_lin, usable, shading)
     if r2_final >= r2 or r2_final >= min_score:
         r2, out = r2_final, out_final
